@@ -1,0 +1,328 @@
+/// @file
+/// The Smart Sampling Kalman Filter: a linear-regression Kalman filter whose samples are an optimal
+/// deterministic (or any other) sample set of N(0, I), mapped through the Cholesky factor of the
+/// prior. Prediction and measurement update with additive Gaussian noise, missing measurement
+/// components, NIS, gating and iterated (posterior-linearised) update.
+#pragma once
+
+#include <s2kf/core/chi_square.hpp>
+#include <s2kf/core/error.hpp>
+#include <s2kf/core/gaussian.hpp>
+#include <s2kf/core/sample_set.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace s2kf {
+
+/// Which measurement components are present this step; absent ones are dropped from y, y^, Cyy and
+/// Cxy before the gain (never zero-filled).
+using ObservedMask = Eigen::Array<bool, Eigen::Dynamic, 1>;
+
+struct UpdateOptions {
+  /// 1: the ordinary update. k > 1: k passes of posterior linearisation (each re-samples at the
+  /// current posterior, fits y ~ H x + b with its residual covariance, and updates from the prior).
+  int iterations = 1;
+  /// 0 disables gating; otherwise the update is rejected (status gated) when the NIS exceeds the
+  /// chi-square quantile of this probability with as many degrees of freedom as observed components.
+  double gate_probability = 0;
+};
+
+struct UpdateResult {
+  FilterStatus status = FilterStatus::ok;
+  double nis = std::numeric_limits<double>::quiet_NaN();  ///< normalised innovation squared t^T t
+  Eigen::Index observed = 0;                             ///< number of observed components used
+  bool ok() const { return status == FilterStatus::ok; }
+};
+
+/// A measurement model is any callable `h(const Eigen::MatrixXd& states, Eigen::MatrixXd& out)`
+/// that maps a block of state samples (state dimension x L, one sample per column) to the block of
+/// predicted measurements (measurement dimension x L; `out` arrives sized). A system model has the
+/// same shape with the state dimension on both sides. Evaluating all samples in one call lets a
+/// model vectorise across samples.
+///
+/// The filter owns scratch buffers, so after the first step with the largest sizes, update() and
+/// predict() do not allocate (for the non-iterated update with positive weights).
+template <int Dim = Eigen::Dynamic>
+class SmartSamplingKalmanFilter {
+ public:
+  using State = Gaussian<double, Dim>;
+
+  explicit SmartSamplingKalmanFilter(SampleSet samples) : samples_(std::move(samples)) {
+    if (samples_.count() < 1 || samples_.dimension() < 1 || samples_.weights.size() != samples_.count())
+      throw DimensionError("SmartSamplingKalmanFilter: the sample set is empty or its weights do not match");
+    if (Dim != Eigen::Dynamic && samples_.dimension() != Dim)
+      throw DimensionError("SmartSamplingKalmanFilter: sample dimension " + std::to_string(samples_.dimension()) +
+                           " differs from the state dimension " + std::to_string(Dim));
+    positive_weights_ = (samples_.weights.array() > 0).all();
+    sqrt_weights_ = samples_.weights.array().abs().sqrt().matrix();
+  }
+
+  const SampleSet& samples() const { return samples_; }
+
+  /// Closed-form linear prediction x <- A x + w, w ~ N(0, Q).
+  FilterStatus predict_linear(State& state, const Eigen::MatrixXd& a, const Eigen::MatrixXd& q) const {
+    const Eigen::Index n = state.dimension();
+    check_square(q, n, "predict_linear: Q");
+    check_square(a, n, "predict_linear: A");
+    state.mean = (a * state.mean).eval();
+    state.covariance = (a * state.covariance * a.transpose() + q).eval();
+    symmetrize(state.covariance);
+    return FilterStatus::ok;
+  }
+
+  /// Random walk x <- x + w, w ~ N(0, Q): only the covariance grows.
+  FilterStatus predict_random_walk(State& state, const Eigen::MatrixXd& q) const {
+    check_square(q, state.dimension(), "predict_random_walk: Q");
+    state.covariance += q;
+    return FilterStatus::ok;
+  }
+
+  /// Sample-based prediction through a nonlinear system model f (block form, see above):
+  /// m <- sum w_i f(x_i), C <- sum w_i (f(x_i) - m)(f(x_i) - m)^T + Q.
+  template <typename SystemModel>
+  FilterStatus predict(State& state, SystemModel&& f, const Eigen::MatrixXd& q) {
+    const Eigen::Index n = state.dimension();
+    check_square(q, n, "predict: Q");
+    if (const FilterStatus s = draw_samples(state.mean, state.covariance); s != FilterStatus::ok) return s;
+    propagated_.resize(n, samples_.count());
+    f(static_cast<const Eigen::MatrixXd&>(x_), propagated_);
+    if (!propagated_.allFinite()) return FilterStatus::non_finite_model_output;
+    const Eigen::VectorXd mean = propagated_ * samples_.weights;
+    propagated_.colwise() -= mean;
+    Eigen::MatrixXd covariance = q;
+    add_weighted_outer(propagated_, covariance);
+    state.mean = mean;
+    state.covariance = covariance;
+    symmetrize(state.covariance);
+    return FilterStatus::ok;
+  }
+
+  /// Measurement update y = h(x) + v, v ~ N(0, R), with every component observed.
+  template <typename MeasurementModel>
+  UpdateResult update(State& state, MeasurementModel&& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                      const UpdateOptions& options = {}) {
+    return update(state, std::forward<MeasurementModel>(h), y, r, ObservedMask::Constant(y.size(), true), options);
+  }
+
+  /// Measurement update with a mask of observed components. On any status but ok the state is
+  /// left exactly as it was.
+  template <typename MeasurementModel>
+  UpdateResult update(State& state, MeasurementModel&& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                      const ObservedMask& observed, const UpdateOptions& options = {}) {
+    const Eigen::Index n = state.dimension();
+    const Eigen::Index m = y.size();
+    if (samples_.dimension() != n)
+      throw DimensionError("update: the state has dimension " + std::to_string(n) + " but the samples " +
+                           std::to_string(samples_.dimension()));
+    check_square(r, m, "update: R");
+    if (observed.size() != m) throw DimensionError("update: the observed mask must have one entry per component");
+    if (options.iterations < 1) throw DimensionError("update: iterations must be at least 1");
+
+    UpdateResult result;
+    select_observed(observed);
+    const Eigen::Index mo = result.observed = observed_count_;
+    if (mo == 0) {
+      result.status = FilterStatus::nothing_observed;
+      return result;
+    }
+    for (Eigen::Index k = 0; k < mo; ++k)
+      if (!std::isfinite(y(index_(k)))) {
+        result.status = FilterStatus::non_finite_measurement;
+        return result;
+      }
+    if (options.iterations > 1) return iterated_update(state, h, y, r, options, result);
+
+    if ((result.status = draw_samples(state.mean, state.covariance)) != FilterStatus::ok) return result;
+    if ((result.status = evaluate_observed(h, m)) != FilterStatus::ok) return result;
+
+    // Cyy = sum w (y_i - y^)(y_i - y^)^T + R_oo and Cyx = sum w (y_i - y^)(x_i - m)^T, using the
+    // exactly zero-mean deviations S z_i for x.
+    auto cyy = cyy_buffer(mo);
+    for (Eigen::Index j = 0; j < mo; ++j)
+      for (Eigen::Index i = j; i < mo; ++i) cyy(i, j) = r(index_(i), index_(j));
+    auto cyx = cyx_buffer(mo, n);
+    auto y_dev = y_dev_.topRows(mo);
+    if (positive_weights_) {
+      y_dev = y_dev * sqrt_weights_.asDiagonal();
+      cyy.template selfadjointView<Eigen::Lower>().rankUpdate(y_dev);
+      x_dev_ = x_dev_ * sqrt_weights_.asDiagonal();
+      cyx.noalias() = y_dev * x_dev_.transpose();
+    } else {
+      cyy.template triangularView<Eigen::Lower>() += y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
+      cyx.noalias() = y_dev * samples_.weights.asDiagonal() * x_dev_.transpose();
+    }
+
+    // Square-root gain: Lyy = chol(Cyy), A^T = Lyy^-1 Cyx, t = Lyy^-1 (y - y^).
+    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(cyy);
+    if (llt.info() != Eigen::Success) {
+      result.status = FilterStatus::innovation_not_positive_definite;
+      return result;
+    }
+    auto innovation = innovation_.head(mo);
+    for (Eigen::Index k = 0; k < mo; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
+    llt.matrixL().solveInPlace(cyx);
+    llt.matrixL().solveInPlace(innovation);
+    result.nis = innovation.squaredNorm();
+    if (gated(result.nis, mo, options)) {
+      result.status = FilterStatus::gated;
+      return result;
+    }
+    // C+ = C - A A^T must stay positive definite; check on a copy before touching the state.
+    posterior_covariance_ = state.covariance;
+    posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(cyx.transpose(), -1.0);
+    posterior_covariance_.template triangularView<Eigen::StrictlyUpper>() =
+        posterior_covariance_.transpose().template triangularView<Eigen::StrictlyUpper>();
+    factor_.compute(posterior_covariance_);
+    if (factor_.info() != Eigen::Success) {
+      result.status = FilterStatus::posterior_not_positive_definite;
+      return result;
+    }
+    state.mean.noalias() += cyx.transpose() * innovation;
+    state.covariance = posterior_covariance_;
+    return result;
+  }
+
+ private:
+  static void check_square(const Eigen::MatrixXd& a, Eigen::Index n, const char* what) {
+    if (a.rows() != n || a.cols() != n)
+      throw DimensionError(std::string(what) + " is " + std::to_string(a.rows()) + "x" + std::to_string(a.cols()) +
+                           ", expected " + std::to_string(n) + "x" + std::to_string(n));
+  }
+
+  template <typename Matrix>
+  static void symmetrize(Matrix& c) {
+    c = (0.5 * (c + c.transpose())).eval();
+  }
+
+  bool gated(double nis, Eigen::Index dof, const UpdateOptions& options) const {
+    return options.gate_probability > 0 &&
+           nis > chi_square_quantile(options.gate_probability, static_cast<double>(dof));
+  }
+
+  void select_observed(const ObservedMask& observed) {
+    index_.resize(observed.size());
+    observed_count_ = 0;
+    for (Eigen::Index i = 0; i < observed.size(); ++i)
+      if (observed(i)) index_(observed_count_++) = i;
+  }
+
+  /// x_i = m + S z_i with S the lower Cholesky factor of C; keeps the deviations S z_i in x_dev_.
+  template <typename Mean, typename Covariance>
+  FilterStatus draw_samples(const Mean& mean, const Covariance& covariance) {
+    if (samples_.dimension() != mean.size())
+      throw DimensionError("the state has dimension " + std::to_string(mean.size()) + " but the samples " +
+                           std::to_string(samples_.dimension()));
+    factor_.compute(covariance);
+    if (factor_.info() != Eigen::Success || !mean.allFinite()) return FilterStatus::prior_not_positive_definite;
+    x_dev_.noalias() = factor_.matrixL() * samples_.points;
+    x_ = x_dev_;
+    x_.colwise() += mean;
+    return FilterStatus::ok;
+  }
+
+  /// Runs h on the current samples, keeps the observed rows as deviations from their weighted mean.
+  template <typename MeasurementModel>
+  FilterStatus evaluate_observed(MeasurementModel& h, Eigen::Index m) {
+    const Eigen::Index mo = observed_count_;
+    predictions_.resize(m, samples_.count());
+    h(static_cast<const Eigen::MatrixXd&>(x_), predictions_);
+    y_dev_.resize(std::max<Eigen::Index>(y_dev_.rows(), m), samples_.count());
+    for (Eigen::Index k = 0; k < mo; ++k) y_dev_.row(k) = predictions_.row(index_(k));
+    auto y_dev = y_dev_.topRows(mo);
+    if (!y_dev.allFinite()) return FilterStatus::non_finite_model_output;
+    y_mean_.resize(std::max<Eigen::Index>(y_mean_.size(), m));
+    y_mean_.head(mo).noalias() = y_dev * samples_.weights;
+    y_dev.colwise() -= y_mean_.head(mo);
+    return FilterStatus::ok;
+  }
+
+  Eigen::Block<Eigen::MatrixXd> cyy_buffer(Eigen::Index mo) {
+    if (cyy_.rows() < mo) cyy_.resize(mo, mo);
+    innovation_.resize(std::max<Eigen::Index>(innovation_.size(), mo));
+    return cyy_.topLeftCorner(mo, mo);
+  }
+  Eigen::Block<Eigen::MatrixXd> cyx_buffer(Eigen::Index mo, Eigen::Index n) {
+    if (cyx_.rows() < mo || cyx_.cols() != n) cyx_.resize(std::max<Eigen::Index>(cyx_.rows(), mo), n);
+    return cyx_.topRows(mo);
+  }
+
+  /// Weighted outer product sum_i w_i d_i d_i^T added to `out` (d_i the columns of `deviations`).
+  void add_weighted_outer(const Eigen::MatrixXd& deviations, Eigen::MatrixXd& out) const {
+    out.noalias() += deviations * samples_.weights.asDiagonal() * deviations.transpose();
+  }
+
+  /// Posterior linearisation: fit y ~ H x + b (residual covariance Omega) at the current posterior,
+  /// update the prior with that linear model, repeat.
+  template <typename MeasurementModel>
+  UpdateResult iterated_update(State& state, MeasurementModel& h, const Eigen::VectorXd& y,
+                               const Eigen::MatrixXd& r, const UpdateOptions& options, UpdateResult result) {
+    const Eigen::Index n = state.dimension();
+    const Eigen::Index m = y.size();
+    const Eigen::Index mo = observed_count_;
+    Eigen::VectorXd y_obs(mo);
+    Eigen::MatrixXd r_obs(mo, mo);
+    for (Eigen::Index i = 0; i < mo; ++i) {
+      y_obs(i) = y(index_(i));
+      for (Eigen::Index j = 0; j < mo; ++j) r_obs(i, j) = r(index_(i), index_(j));
+    }
+    Eigen::VectorXd mean = state.mean;
+    Eigen::MatrixXd covariance = state.covariance;
+    for (int pass = 0; pass < options.iterations; ++pass) {
+      if ((result.status = draw_samples(mean, covariance)) != FilterStatus::ok) return result;
+      if ((result.status = evaluate_observed(h, m)) != FilterStatus::ok) return result;
+      const Eigen::MatrixXd y_dev = y_dev_.topRows(mo);
+      const Eigen::MatrixXd pyy = y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
+      const Eigen::MatrixXd pxy = x_dev_ * samples_.weights.asDiagonal() * y_dev.transpose();
+      // H = Pxy^T C_i^-1 via the Cholesky factor of C_i already in factor_.
+      const Eigen::MatrixXd h_lin = factor_.solve(pxy).transpose();
+      const Eigen::MatrixXd omega = pyy - h_lin * covariance * h_lin.transpose();
+      const Eigen::VectorXd offset = y_mean_.head(mo) - h_lin * mean;
+      Eigen::MatrixXd s = h_lin * state.covariance * h_lin.transpose() + r_obs + omega;
+      symmetrize(s);
+      Eigen::LLT<Eigen::MatrixXd> llt(s);
+      if (llt.info() != Eigen::Success) {
+        result.status = FilterStatus::innovation_not_positive_definite;
+        return result;
+      }
+      const Eigen::VectorXd innovation = y_obs - h_lin * state.mean - offset;
+      const Eigen::MatrixXd gain_t = llt.solve(h_lin * state.covariance);  // K^T = S^-1 H C
+      result.nis = innovation.dot(llt.solve(innovation));
+      mean = state.mean + gain_t.transpose() * innovation;
+      covariance = state.covariance - gain_t.transpose() * s * gain_t;
+      symmetrize(covariance);
+    }
+    if (gated(result.nis, mo, options)) {
+      result.status = FilterStatus::gated;
+      return result;
+    }
+    if (Eigen::LLT<Eigen::MatrixXd>(covariance).info() != Eigen::Success) {
+      result.status = FilterStatus::posterior_not_positive_definite;
+      return result;
+    }
+    (void)n;
+    state.mean = mean;
+    state.covariance = covariance;
+    return result;
+  }
+
+  SampleSet samples_;
+  bool positive_weights_ = true;
+  Eigen::VectorXd sqrt_weights_;
+
+  // Scratch space, grown to the largest sizes seen and then reused.
+  Eigen::LLT<Eigen::MatrixXd> factor_;
+  Eigen::MatrixXd x_dev_, x_, propagated_, predictions_, y_dev_, cyy_, cyx_, posterior_covariance_;
+  Eigen::VectorXd y_mean_, innovation_;
+  Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> index_;
+  Eigen::Index observed_count_ = 0;
+};
+
+using S2kf = SmartSamplingKalmanFilter<Eigen::Dynamic>;
+
+}  // namespace s2kf

@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds the s2kf program and runs the main job on the bundled data.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install-deps.sh
+jobs=$(nproc 2>/dev/null || echo 2)
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j "$jobs" --target s2kf_cli
+mkdir -p results
+./build/s2kf samples --dim 46 --count 301
