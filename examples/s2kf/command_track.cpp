@@ -1,0 +1,320 @@
+// `s2kf track`: stream C3D recordings through the S2KF tracker and write the motion as CSV, OpenSim
+// .mot, BVH, a JSON summary and a per-frame marker report.
+#include "command.hpp"
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/io/bvh.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/motion_files.hpp>
+#include <s2kf/track/gradient_baseline.hpp>
+#include <s2kf/track/height_estimate.hpp>
+#include <s2kf/track/tracker.hpp>
+#include <s2kf/track/tracking_metrics.hpp>
+#include <s2kf/track/tracking_run.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+namespace s2kf::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct TrackSettings {
+  std::vector<std::string> inputs;
+  std::string out;
+  double height_mm = 0;  // 0: estimate
+  int samples = 0;       // 0: the preset's
+  std::string preset = "default";
+  std::string method = "s2kf";
+  bool realtime = false;
+  bool quiet = false;
+  int jobs = 0;
+};
+
+/// Coordinates beyond a kilometre are not a body: the file's units or scale must be wrong.
+constexpr double kAbsurdMm = 1e6;
+
+struct TrackOutcome {
+  nlohmann::json summary;
+  std::string paragraph;
+};
+
+std::string format(double value, int precision = 1) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << value;
+  return s.str();
+}
+
+std::vector<std::string> recording_labels(const c3d::C3dInfo& info) {
+  std::vector<std::string> labels;
+  for (const c3d::PointLabel& label : info.labels)
+    labels.push_back(label.model_output ? std::string() : label.name);  // model outputs never match
+  return labels;
+}
+
+TrackOutcome track_file(const std::string& input, const std::string& prefix, const TrackSettings& settings,
+                        bool show_progress) {
+  std::unique_ptr<c3d::C3dReader> reader;
+  try {
+    reader = std::make_unique<c3d::C3dReader>(input);
+  } catch (const std::exception& e) {
+    throw UserError(e.what());
+  }
+  const c3d::C3dInfo& info = reader->info();
+  if (info.frame_count == 0) throw UserError(input + ": the recording holds no complete frame");
+  if (!(info.rate > 0)) throw UserError(input + ": the recording has no valid frame rate");
+  body::BodyModel model = body::mmm_body_model(1000.0);
+  track::MarkerMapping mapping = track::map_markers(recording_labels(info), model.marker_names());
+  for (const c3d::PointLabel& label : info.labels)
+    if (label.model_output) {
+      auto& ignored = mapping.ignored_labels;
+      std::replace(ignored.begin(), ignored.end(), std::string(), label.raw);
+    }
+  track::TrackerOptions options = track::preset_options(settings.preset, info.rate);
+  if (settings.samples > 0) options.samples = settings.samples;
+  if (mapping.markers_used() == 0)
+    throw UserError(input + ": none of its " + std::to_string(info.point_count) +
+                    " point labels is a marker of the body model (expected names such as LASI, RKNE, C7)");
+  if (mapping.markers_used() < options.min_markers_to_start)
+    throw UserError(input + ": only " + std::to_string(mapping.markers_used()) +
+                    " of its labels are markers of the body model; at least " +
+                    std::to_string(options.min_markers_to_start) + " are needed to track");
+
+  std::vector<std::string> warnings = info.warnings;
+  double height = settings.height_mm;
+  std::string height_source = "given";
+  if (height <= 0) {
+    // Rigid marker pairs over up to 200 frames spread through the recording.
+    track::HeightEstimator estimator(model, mapping);
+    c3d::Frame frame;
+    const std::int64_t step = std::max<std::int64_t>(1, info.frame_count / 200);
+    for (std::int64_t f = 0; f < info.frame_count; f += step) {
+      reader->seek_frame(f);
+      if (!reader->read_frame(frame)) break;
+      estimator.add_frame(frame.positions, frame.visible);
+    }
+    if (auto estimate = estimator.height_mm()) {
+      height = *estimate;
+      height_source = "estimated from " + std::to_string(estimator.pair_count()) + " rigid marker pairs";
+    } else {
+      height = 1750;
+      height_source = "default (no two markers on one segment to estimate it from)";
+      warnings.push_back("body height not estimable from the markers; 1750 mm assumed (use --height)");
+    }
+    reader->seek_frame(0);
+  }
+  if (!(height > 300 && height < 3000))
+    throw UserError(input + ": a body height of " + format(height, 0) +
+                    " mm is not a person's; check the file's units or give --height");
+  model = model.scaled(height);
+
+  std::unique_ptr<track::Tracker> s2kf_tracker;
+  std::unique_ptr<track::GradientBaseline> baseline;
+  if (settings.method == "s2kf")
+    s2kf_tracker = std::make_unique<track::Tracker>(model, mapping, options, info.rate);
+  else
+    baseline = std::make_unique<track::GradientBaseline>(model, mapping);
+
+  const auto start = std::chrono::steady_clock::now();
+  const double frame_period = 1.0 / info.rate;
+  long deadline_misses = 0;
+  std::string bad_coordinates;
+  auto next_frame = [&](c3d::Frame& frame) {
+    if (!bad_coordinates.empty() || !reader->read_frame(frame)) return false;
+    for (Eigen::Index p = 0; p < frame.positions.cols(); ++p)
+      if (frame.visible(p) && (frame.positions.col(p).cwiseAbs().maxCoeff() > kAbsurdMm)) {
+        std::ostringstream s;
+        s << input << ": frame " << frame.index << ", point " << info.labels[p].raw << " is at ("
+          << frame.positions.col(p).transpose() << ") mm, beyond a kilometre: the file's units or scale are wrong";
+        bad_coordinates = s.str();
+        return false;
+      }
+    if (settings.realtime) {
+      const auto due = start + std::chrono::duration<double>(static_cast<double>(frame.index) * frame_period);
+      std::this_thread::sleep_until(due);
+    }
+    return true;
+  };
+  auto on_frame = [&](long index) {
+    if (settings.realtime) {
+      const double late = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
+                          (static_cast<double>(index) + 1) * frame_period;
+      if (late > 0) ++deadline_misses;
+    }
+    if (show_progress && (index % 25 == 0 || index + 1 == info.frame_count)) {
+      const int width = 40;
+      const double done = static_cast<double>(index + 1) / static_cast<double>(info.frame_count);
+      std::cerr << "\r" << fs::path(input).filename().string() << " ["
+                << std::string(static_cast<std::size_t>(done * width), '#')
+                << std::string(width - static_cast<std::size_t>(done * width), ' ') << "] " << index + 1 << "/"
+                << info.frame_count << std::flush;
+    }
+  };
+  const auto joint_names = model.joint_names();
+  track::TrackingRun run =
+      s2kf_tracker ? track::run_tracking(*s2kf_tracker, next_frame, info.rate, joint_names, false, on_frame)
+                   : track::run_tracking(*baseline, next_frame, info.rate, joint_names, false, on_frame);
+  if (show_progress) std::cerr << "\n";
+  if (!bad_coordinates.empty()) throw UserError(bad_coordinates);
+  if (run.frames_tracked == 0)
+    throw UserError(input + ": no frame has the " + std::to_string(options.min_markers_to_start) +
+                    " visible markers needed to start tracking");
+  warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
+
+  const long converged = track::converged_frame(run.mean_marker_distance);
+  const double level = track::mean_from(run.mean_marker_distance, converged);
+  std::vector<double> latency_ms;
+  for (double s : run.seconds) latency_ms.push_back(1000 * s);
+  const double median_ms = track::quantile(latency_ms, 0.5), p99_ms = track::quantile(latency_ms, 0.99);
+
+  // Outputs, each written completely or not at all.
+  const std::string name = fs::path(input).stem().string();
+  io::save_motion_csv(prefix + ".csv", run.motion);
+  io::save_opensim_mot(prefix + ".mot", run.motion, name);
+  io::save_bvh(prefix + ".bvh", model, run.motion, info.rate);
+  io::write_file_atomically(prefix + "_markers.csv", [&](std::ostream& out) {
+    out << "frame,time,mean_marker_distance_mm,visible_markers\n" << std::setprecision(9);
+    for (std::size_t f = 0; f < run.motion.frame.size(); ++f) {
+      out << run.motion.frame[f] << "," << run.motion.time[f] << ",";
+      if (std::isfinite(run.mean_marker_distance[f])) out << run.mean_marker_distance[f];
+      else out << "nan";
+      out << "," << run.visible_markers[f] << "\n";
+    }
+  });
+  std::vector<std::string> markers_used;
+  for (int m = 0; m < model.marker_count(); ++m)
+    if (mapping.point_of_marker[m] >= 0) markers_used.push_back(model.markers[m].name);
+  nlohmann::json summary = {
+      {"input", input},
+      {"method", settings.method},
+      {"preset", options.preset},
+      {"frames", run.motion.frame.size()},
+      {"frames_tracked", run.frames_tracked},
+      {"rate", info.rate},
+      {"height_mm", height},
+      {"height_source", height_source},
+      {"markers_used", markers_used},
+      {"labels_ignored", mapping.ignored_labels},
+      {"mean_marker_distance_mm", std::isfinite(level) ? nlohmann::json(level) : nlohmann::json(nullptr)},
+      {"converged_frame", converged},
+      {"latency_ms", {{"median", median_ms}, {"p99", p99_ms}}},
+      {"samples", settings.method == "s2kf" ? nlohmann::json(options.samples) : nlohmann::json(nullptr)},
+      {"warnings", warnings},
+  };
+  if (settings.realtime) summary["deadline_misses"] = deadline_misses;
+  io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
+
+  std::ostringstream paragraph;
+  paragraph << name << ": tracked " << run.frames_tracked << " of " << run.motion.frame.size() << " frames at "
+            << format(info.rate, 0) << " Hz with " << markers_used.size() << " markers ("
+            << mapping.ignored_labels.size() << " labels ignored), body height " << format(height, 0) << " mm ("
+            << height_source << "). Converged at frame " << converged << "; mean marker distance after that "
+            << format(level, 1) << " mm. Latency per frame: median " << format(median_ms, 3) << " ms, p99 "
+            << format(p99_ms, 3) << " ms";
+  if (settings.method == "s2kf") paragraph << " (" << options.samples << " samples)";
+  paragraph << ".";
+  if (settings.realtime) paragraph << " Real-time pacing: " << deadline_misses << " deadline misses.";
+  if (!warnings.empty()) paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
+  paragraph << "\nWrote " << prefix << ".csv, .mot, .bvh, .json and _markers.csv.";
+  return {summary, paragraph.str()};
+}
+
+/// Expands directories into their .c3d files (sorted), keeps files as given.
+std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
+  std::vector<std::string> files;
+  for (const std::string& input : inputs) {
+    if (fs::is_directory(input)) {
+      std::vector<std::string> found;
+      for (const auto& entry : fs::directory_iterator(input)) {
+        std::string ext = entry.path().extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+        if (entry.is_regular_file() && ext == ".c3d") found.push_back(entry.path().string());
+      }
+      if (found.empty()) throw UserError(input + " is a directory without .c3d files");
+      std::sort(found.begin(), found.end());
+      files.insert(files.end(), found.begin(), found.end());
+    } else if (!fs::exists(input)) {
+      throw UserError(input + ": no such file");
+    } else {
+      files.push_back(input);
+    }
+  }
+  return files;
+}
+
+void run_track(const TrackSettings& settings) {
+  const std::vector<std::string> files = expand_inputs(settings.inputs);
+  const bool batch = files.size() > 1;
+  const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
+  if (!batch) {
+    const std::string prefix =
+        settings.out.empty() ? fs::path(files[0]).stem().string() : settings.out;
+    if (fs::path(prefix).has_parent_path()) fs::create_directories(fs::path(prefix).parent_path());
+    const TrackOutcome outcome = track_file(files[0], prefix, settings, terminal);
+    if (!settings.quiet) std::cout << outcome.paragraph << "\n";
+    return;
+  }
+  // Many recordings: one per thread, outputs in the --out directory named after each recording.
+  const fs::path directory = settings.out.empty() ? fs::path(".") : fs::path(settings.out);
+  fs::create_directories(directory);
+  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned jobs = settings.jobs > 0 ? static_cast<unsigned>(settings.jobs) : hardware;
+  std::atomic<std::size_t> next{0};
+  std::mutex print;
+  std::vector<std::string> failures;
+  auto worker = [&]() {
+    for (std::size_t i; (i = next++) < files.size();) {
+      const std::string prefix = (directory / fs::path(files[i]).stem()).string();
+      try {
+        const TrackOutcome outcome = track_file(files[i], prefix, settings, false);
+        std::lock_guard<std::mutex> lock(print);
+        if (!settings.quiet) std::cout << outcome.paragraph << "\n\n";
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(print);
+        failures.push_back(e.what());
+        std::cerr << "s2kf: " << e.what() << "\n";
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (unsigned t = 0; t < std::min<std::size_t>(jobs, files.size()); ++t) threads.emplace_back(worker);
+  for (auto& thread : threads) thread.join();
+  if (!failures.empty())
+    throw UserError(std::to_string(failures.size()) + " of " + std::to_string(files.size()) +
+                    " recordings could not be tracked (see above)");
+}
+
+const RegisterCommand registration{
+    "track", "Track whole-body motion in C3D recordings with the S2KF", [](CLI::App& app) {
+      auto settings = std::make_shared<TrackSettings>();
+      app.add_option("recordings", settings->inputs, "C3D files or directories of them")->required();
+      app.add_option("--out", settings->out,
+                     "output prefix (one recording; default: its name) or directory (several)");
+      app.add_option("--height", settings->height_mm, "subject height in mm (default: estimated from rigid marker pairs)")
+          ->check(CLI::Range(300.0, 3000.0));
+      app.add_option("--samples", settings->samples, "S2KF sample count (default 301)")->check(CLI::Range(3, 100001));
+      app.add_option("--preset", settings->preset, "noise preset: default or paper")
+          ->check(CLI::IsMember({"default", "paper"}));
+      app.add_option("--method", settings->method, "s2kf, or baseline (per-frame Levenberg-Marquardt)")
+          ->check(CLI::IsMember({"s2kf", "baseline"}));
+      app.add_flag("--realtime", settings->realtime, "pace frames at the recording's rate and count deadline misses");
+      app.add_flag("--quiet", settings->quiet, "print nothing but errors");
+      app.add_option("--jobs", settings->jobs, "recordings tracked at once (default: all cores)")
+          ->check(CLI::Range(1, 1024));
+      app.callback([settings] { run_track(*settings); });
+    }};
+
+}  // namespace
+}  // namespace s2kf::cli

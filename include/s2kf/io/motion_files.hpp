@@ -1,0 +1,93 @@
+/// @file
+/// Writing a tracked or simulated motion (root pose and joint angles per frame) as CSV (the
+/// project's own column layout, also used for ground truth) and as an OpenSim motion file (.mot).
+#pragma once
+
+#include <s2kf/io/atomic_file.hpp>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace s2kf::io {
+
+/// A motion: one row per frame with the root position (mm), root roll/pitch/yaw (rad) and the
+/// joint angles (rad, in joint_names order). Frames that were not tracked hold NaN.
+struct MotionTable {
+  std::vector<std::string> joint_names;
+  std::vector<long> frame;   ///< frame numbers as in the recording (0-based)
+  std::vector<double> time;  ///< seconds
+  Eigen::MatrixXd values;    ///< frames x (6 + joints): root_x,y,z, roll, pitch, yaw, joints...
+
+  Eigen::Index frames() const { return values.rows(); }
+  void check() const {
+    if (values.cols() != static_cast<Eigen::Index>(6 + joint_names.size()) ||
+        frame.size() != static_cast<std::size_t>(values.rows()) || time.size() != frame.size())
+      throw std::invalid_argument("MotionTable: frame, time and value rows do not match the joint names");
+  }
+};
+
+/// The CSV header: frame,time,root_x,root_y,root_z,root_roll,root_pitch,root_yaw,<joints>.
+inline std::vector<std::string> motion_columns(const std::vector<std::string>& joint_names) {
+  std::vector<std::string> columns{"frame", "time", "root_x", "root_y", "root_z", "root_roll", "root_pitch", "root_yaw"};
+  columns.insert(columns.end(), joint_names.begin(), joint_names.end());
+  return columns;
+}
+
+/// CSV in mm and rad with full precision (%.9g); untracked values are written as "nan".
+inline void write_motion_csv(std::ostream& out, const MotionTable& motion) {
+  motion.check();
+  const auto columns = motion_columns(motion.joint_names);
+  for (std::size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c];
+  out << "\n" << std::setprecision(9);
+  for (Eigen::Index r = 0; r < motion.frames(); ++r) {
+    out << motion.frame[r] << "," << motion.time[r];
+    for (Eigen::Index c = 0; c < motion.values.cols(); ++c) {
+      const double v = motion.values(r, c);
+      out << ",";
+      if (std::isfinite(v))
+        out << v;
+      else
+        out << "nan";
+    }
+    out << "\n";
+  }
+}
+
+/// OpenSim motion file: tab-separated, a header ending in "endheader", angles in degrees
+/// (inDegrees=yes), root translation in metres (OpenSim's unit for translational coordinates).
+/// Untracked frames are left out, since OpenSim cannot read NaN.
+inline void write_opensim_mot(std::ostream& out, const MotionTable& motion, const std::string& name) {
+  motion.check();
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index r = 0; r < motion.frames(); ++r)
+    if (motion.values.row(r).allFinite()) rows.push_back(r);
+  const auto columns = motion_columns(motion.joint_names);
+  out << name << "\nversion=1\nnRows=" << rows.size() << "\nnColumns=" << columns.size() - 1
+      << "\ninDegrees=yes\nendheader\ntime";
+  for (std::size_t c = 2; c < columns.size(); ++c) out << "\t" << columns[c];
+  out << "\n" << std::setprecision(9);
+  const double degrees = 180.0 / 3.14159265358979323846;
+  for (Eigen::Index r : rows) {
+    out << motion.time[r];
+    for (Eigen::Index c = 0; c < motion.values.cols(); ++c)
+      out << "\t" << motion.values(r, c) * (c < 3 ? 0.001 : degrees);
+    out << "\n";
+  }
+}
+
+inline void save_motion_csv(const std::string& path, const MotionTable& motion) {
+  write_file_atomically(path, [&](std::ostream& out) { write_motion_csv(out, motion); });
+}
+
+inline void save_opensim_mot(const std::string& path, const MotionTable& motion, const std::string& name) {
+  write_file_atomically(path, [&](std::ostream& out) { write_opensim_mot(out, motion, name); });
+}
+
+}  // namespace s2kf::io

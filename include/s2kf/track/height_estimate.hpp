@@ -1,0 +1,65 @@
+/// @file
+/// Estimating the subject's body height from a recording: distances between markers on the same
+/// rigid segment do not change with the pose, so their ratio to the model's gives the scale.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/pose.hpp>
+#include <s2kf/track/marker_mapping.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <optional>
+#include <vector>
+
+namespace s2kf::track {
+
+/// Collects, frame by frame, the distance ratios of every visible pair of mapped markers that ride
+/// on the same frame of the model (at least 50 mm apart in the model, so noise stays small), and
+/// returns model height x median ratio. Without any such pair it returns nothing.
+class HeightEstimator {
+ public:
+  HeightEstimator(const body::BodyModel& model, MarkerMapping mapping) : mapping_(std::move(mapping)), height_(model.height_mm) {
+    const Eigen::Matrix3Xd zero = body::marker_positions(model, body::Pose{});
+    for (int a = 0; a < model.marker_count(); ++a)
+      for (int b = a + 1; b < model.marker_count(); ++b) {
+        if (model.markers[a].frame != model.markers[b].frame) continue;
+        if (mapping_.point_of_marker[a] < 0 || mapping_.point_of_marker[b] < 0) continue;
+        const double d = (zero.col(a) - zero.col(b)).norm();
+        if (d >= 50.0 * model.height_mm / 1000.0) pairs_.push_back({a, b, d});
+      }
+  }
+
+  /// Number of rigid marker pairs the recording offers.
+  std::size_t pair_count() const { return pairs_.size(); }
+
+  void add_frame(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
+    for (const Pair& pair : pairs_) {
+      const int pa = mapping_.point_of_marker[pair.a], pb = mapping_.point_of_marker[pair.b];
+      if (pa >= points.cols() || pb >= points.cols() || !visible(pa) || !visible(pb)) continue;
+      const double d = (points.col(pa) - points.col(pb)).norm();
+      if (std::isfinite(d) && d > 0) ratios_.push_back(d / pair.model_distance);
+    }
+  }
+
+  std::optional<double> height_mm() const {
+    if (ratios_.empty()) return std::nullopt;
+    std::vector<double> sorted = ratios_;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    return height_ * sorted[sorted.size() / 2];
+  }
+
+ private:
+  struct Pair {
+    int a, b;
+    double model_distance;
+  };
+  MarkerMapping mapping_;
+  double height_;
+  std::vector<Pair> pairs_;
+  std::vector<double> ratios_;
+};
+
+}  // namespace s2kf::track

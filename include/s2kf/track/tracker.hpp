@@ -1,0 +1,248 @@
+/// @file
+/// The whole-body tracker: streams marker frames through the S2KF with the bounded-joint marker
+/// model and reports the pose per frame. No file I/O; frame by frame, for live systems too.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/bounded_joints.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_measurement_model.hpp>
+#include <s2kf/body/pose.hpp>
+#include <s2kf/core/lcd_sample_set.hpp>
+#include <s2kf/core/smart_sampling_kalman_filter.hpp>
+#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/tracker_options.hpp>
+
+#include <Eigen/Geometry>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace s2kf::track {
+
+/// What the tracker knows after one frame.
+struct FrameEstimate {
+  bool tracked = false;  ///< false before the first frame with enough markers
+  FilterStatus status = FilterStatus::nothing_observed;
+  body::Pose pose;                  ///< root position (mm), roll/pitch/yaw (rad), joint angles (rad)
+  Eigen::Matrix3d root_rotation = Eigen::Matrix3d::Identity();
+  Eigen::MatrixXd covariance;       ///< 46 x 46: position, orientation error (rad), Theta
+  Eigen::Matrix3Xd predicted_markers;  ///< every model marker at the estimated pose (mm)
+  Eigen::VectorXd marker_distance;     ///< per model marker, mm; NaN where not observed
+  double mean_marker_distance = std::numeric_limits<double>::quiet_NaN();
+  int visible_markers = 0;  ///< mapped markers observed this frame
+  double nis = std::numeric_limits<double>::quiet_NaN();
+  double seconds = 0;  ///< time spent in process()
+};
+
+/// Tracks one subject. State x = [root position (3), orientation error (3), Theta (joints)], where
+/// the orientation error is a rotation vector about the current estimate (R = R_ref Exp(delta)),
+/// folded into R_ref after every update: the filter never sees the roll-pitch-yaw singularity, so
+/// the root can turn through any rotation. Joint angles are theta = bounded(Theta), inside their
+/// limits for every Theta.
+class Tracker {
+ public:
+  static constexpr int kRootDofs = 6;
+
+  Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options, double rate_hz)
+      : model_(std::move(model)),
+        mapping_(std::move(mapping)),
+        options_(std::move(options)),
+        rate_hz_(rate_hz),
+        filter_(compute_lcd_sample_set(state_dimension(), options_.samples).set),
+        measurement_model_(model_, body::OrientationParameterization::local_rotation_error) {
+    options_.validate();
+    if (!(rate_hz > 0)) throw std::invalid_argument("the frame rate must be positive");
+    if (mapping_.point_of_marker.size() != static_cast<std::size_t>(model_.marker_count()))
+      throw std::invalid_argument("the marker mapping does not fit the body model");
+    for (int m = 0; m < model_.marker_count(); ++m)
+      if (mapping_.point_of_marker[m] >= 0) used_markers_.push_back(m);
+    if (used_markers_.empty()) throw std::invalid_argument("no recording label matches a marker of the model");
+    measurement_model_.select_markers(used_markers_);
+    const int n = state_dimension();
+    const double dt = 1.0 / rate_hz_;
+    process_noise_ = Eigen::MatrixXd::Zero(n, n);
+    process_noise_.diagonal().segment<3>(0).setConstant(std::pow(options_.position_speed_mm_per_s * dt, 2));
+    process_noise_.diagonal().segment<3>(3).setConstant(std::pow(options_.orientation_speed_rad_per_s * dt, 2));
+    process_noise_.diagonal().tail(joint_count()).setConstant(std::pow(options_.joint_speed_per_s * dt, 2));
+    const Eigen::Index m = 3 * static_cast<Eigen::Index>(used_markers_.size());
+    noise_ = Eigen::MatrixXd::Identity(m, m) * options_.marker_noise_mm * options_.marker_noise_mm;
+    measurement_.resize(m);
+    observed_.resize(m);
+    estimate_.marker_distance.resize(model_.marker_count());
+  }
+
+  int joint_count() const { return model_.joint_count(); }
+  int state_dimension() const { return kRootDofs + model_.joint_count(); }
+  const body::BodyModel& model() const { return model_; }
+  const MarkerMapping& mapping() const { return mapping_; }
+  const TrackerOptions& options() const { return options_; }
+  bool initialised() const { return initialised_; }
+  const FrameEstimate& estimate() const { return estimate_; }
+  const std::vector<int>& used_markers() const { return used_markers_; }
+  int frames_processed() const { return frames_; }
+
+  /// One frame: the recording's points (3 x P, mm, in recording order) and which are visible.
+  /// Non-finite coordinates count as not visible.
+  const FrameEstimate& process(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
+    const auto start = std::chrono::steady_clock::now();
+    if (points.cols() != visible.size())
+      throw std::invalid_argument("process: one visibility flag per recording point is needed");
+    int count = 0;
+    for (std::size_t k = 0; k < used_markers_.size(); ++k) {
+      const int point = mapping_.point_of_marker[used_markers_[k]];
+      const bool seen = point < points.cols() && visible(point) && points.col(point).allFinite();
+      for (int a = 0; a < 3; ++a) {
+        observed_(3 * k + a) = seen;
+        measurement_(3 * k + a) = seen ? points(a, point) : 0.0;
+      }
+      count += seen;
+    }
+    estimate_.visible_markers = count;
+    ++frames_;
+    if (!initialised_) {
+      if (count >= options_.min_markers_to_start) initialise(points);
+      if (!initialised_) {
+        estimate_.tracked = false;
+        estimate_.status = FilterStatus::nothing_observed;
+        finish(points, visible, start);
+        return estimate_;
+      }
+    } else {
+      filter_.predict_random_walk(state_, process_noise_);
+    }
+    UpdateOptions update_options;
+    update_options.gate_probability = options_.gate_probability;
+    if (frames_since_start_ <= options_.converging_frames)
+      update_options.iterations = frames_since_start_ == 0 ? options_.initial_iterations : options_.converging_iterations;
+    ++frames_since_start_;
+    estimate_.status = FilterStatus::nothing_observed;
+    estimate_.nis = std::numeric_limits<double>::quiet_NaN();
+    if (count > 0) {
+      measurement_model_.set_reference_orientation(reference_rotation_);
+      const UpdateResult result = filter_.update(state_, measurement_model_, measurement_, noise_, observed_, update_options);
+      estimate_.status = result.status;
+      estimate_.nis = result.nis;
+      if (result.ok()) recentre();
+    }
+    estimate_.tracked = true;
+    finish(points, visible, start);
+    return estimate_;
+  }
+
+ private:
+  /// Start from the first frame with enough markers: root pose from a rigid fit of the visible
+  /// markers to the model's zero pose (or the paper's marker mean), joints near the zero pose.
+  void initialise(const Eigen::Matrix3Xd& points) {
+    const int n = state_dimension();
+    state_.mean = Eigen::VectorXd::Zero(n);
+    state_.covariance = Eigen::MatrixXd::Zero(n, n);
+    Eigen::Matrix3Xd measured(3, estimate_.visible_markers), reference(3, estimate_.visible_markers);
+    const Eigen::Matrix3Xd zero_pose = body::marker_positions(model_, body::Pose{});
+    int k = 0;
+    for (std::size_t u = 0; u < used_markers_.size(); ++u) {
+      if (!observed_(3 * u)) continue;
+      measured.col(k) = points.col(mapping_.point_of_marker[used_markers_[u]]);
+      reference.col(k) = zero_pose.col(used_markers_[u]);
+      ++k;
+    }
+    const Eigen::Vector3d centroid = measured.rowwise().mean();
+    reference_rotation_.setIdentity();
+    Eigen::Vector3d position = centroid;
+    if (options_.rigid_initialisation) {
+      const Eigen::Matrix4d fit = Eigen::umeyama(reference, measured, false);
+      reference_rotation_ = fit.topLeftCorner<3, 3>();
+      position = fit.topRightCorner<3, 1>();
+    }
+    state_.mean.head<3>() = position;
+    state_.covariance.diagonal().head<3>().setConstant(std::pow(options_.initial_position_sd_mm, 2));
+    if (!options_.rigid_initialisation) {
+      // The paper: C_r is the sample covariance of the first frame's markers.
+      const Eigen::Matrix3Xd centred = measured.colwise() - centroid;
+      state_.covariance.topLeftCorner<3, 3>() = centred * centred.transpose() / std::max<Eigen::Index>(1, k - 1);
+    }
+    state_.covariance.diagonal().segment<3>(3).setConstant(std::pow(options_.initial_orientation_sd_rad, 2));
+    // Joints: the paper starts every joint at mid-range (Theta = 0); the default starts at the
+    // zero pose (standing) but keeps a joint whose zero lies on a limit a little inside it, where
+    // sin still has slope, so the filter can move it.
+    if (options_.preset != "paper") {
+      for (int j = 0; j < joint_count(); ++j) {
+        const double lower = model_.joints[j].lower, upper = model_.joints[j].upper;
+        if (upper <= lower) continue;
+        const double normalised = std::clamp((0.0 - 0.5 * (upper + lower)) / (0.5 * (upper - lower)), -0.8, 0.8);
+        state_.mean(kRootDofs + j) = std::asin(normalised);
+      }
+    }
+    state_.covariance.diagonal().tail(joint_count()).setConstant(std::pow(options_.initial_joint_sd, 2));
+    initialised_ = true;
+    frames_since_start_ = 0;
+  }
+
+  /// Folds the orientation error into the reference and keeps every Theta on the principal branch
+  /// [-pi/2, pi/2], where theta(Theta) is one-to-one (reflections pi - Theta keep theta, and flip
+  /// the sign of that state's row and column of the covariance).
+  void recentre() {
+    measurement_model_.recenter(state_.mean);
+    reference_rotation_ = measurement_model_.reference_orientation();
+    for (int j = 0; j < joint_count(); ++j) {
+      double& theta = state_.mean(kRootDofs + j);
+      const double folded = std::remainder(theta, 2 * kPi);  // (-pi, pi]
+      theta = folded;
+      if (std::abs(folded) > kPi / 2) {
+        theta = (folded > 0 ? kPi : -kPi) - folded;
+        state_.covariance.row(kRootDofs + j) *= -1;
+        state_.covariance.col(kRootDofs + j) *= -1;
+      }
+    }
+  }
+
+  void finish(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible,
+              std::chrono::steady_clock::time_point start) {
+    estimate_.marker_distance.setConstant(std::numeric_limits<double>::quiet_NaN());
+    estimate_.mean_marker_distance = std::numeric_limits<double>::quiet_NaN();
+    if (estimate_.tracked) {
+      estimate_.root_rotation = reference_rotation_;
+      measurement_model_.set_reference_orientation(reference_rotation_);
+      estimate_.pose = measurement_model_.pose(state_.mean);
+      estimate_.covariance = state_.covariance;
+      estimate_.predicted_markers = body::marker_positions(model_, estimate_.pose);
+      double sum = 0;
+      int count = 0;
+      for (int m = 0; m < model_.marker_count(); ++m) {
+        const int point = mapping_.point_of_marker[m];
+        if (point < 0 || point >= points.cols() || !visible(point) || !points.col(point).allFinite()) continue;
+        const double d = (points.col(point) - estimate_.predicted_markers.col(m)).norm();
+        estimate_.marker_distance(m) = d;
+        sum += d;
+        ++count;
+      }
+      if (count > 0) estimate_.mean_marker_distance = sum / count;
+    }
+    estimate_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  static constexpr double kPi = 3.14159265358979323846;
+
+  body::BodyModel model_;
+  MarkerMapping mapping_;
+  TrackerOptions options_;
+  double rate_hz_;
+  SmartSamplingKalmanFilter<Eigen::Dynamic> filter_;
+  body::MarkerMeasurementModel measurement_model_;
+  std::vector<int> used_markers_;
+  GaussianXd state_;
+  Eigen::Matrix3d reference_rotation_ = Eigen::Matrix3d::Identity();
+  Eigen::MatrixXd process_noise_, noise_;
+  Eigen::VectorXd measurement_;
+  ObservedMask observed_;
+  FrameEstimate estimate_;
+  bool initialised_ = false;
+  int frames_ = 0;
+  int frames_since_start_ = 0;
+};
+
+}  // namespace s2kf::track
