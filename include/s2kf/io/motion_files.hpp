@@ -7,7 +7,12 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <istream>
+#include <sstream>
 #include <iomanip>
 #include <limits>
 #include <ostream>
@@ -88,6 +93,62 @@ inline void save_motion_csv(const std::string& path, const MotionTable& motion) 
 
 inline void save_opensim_mot(const std::string& path, const MotionTable& motion, const std::string& name) {
   write_file_atomically(path, [&](std::ostream& out) { write_opensim_mot(out, motion, name); });
+}
+
+/// Reads a motion CSV written by write_motion_csv (or the simulator's truth): the header must be
+/// frame,time,root_x,...,root_yaw followed by joint names. Throws std::runtime_error naming the
+/// file, line and problem.
+inline MotionTable read_motion_csv(std::istream& in, const std::string& name) {
+  auto split = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::string cell;
+    std::istringstream s(line);
+    while (std::getline(s, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.emplace_back();
+    return cells;
+  };
+  std::string line;
+  if (!std::getline(in, line)) throw std::runtime_error(name + ": empty file, expected a motion CSV header");
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  const auto header = split(line);
+  const std::vector<std::string> fixed = motion_columns({});
+  if (header.size() < fixed.size() || !std::equal(fixed.begin(), fixed.end(), header.begin()))
+    throw std::runtime_error(name + ": the header does not start with frame,time,root_x,root_y,root_z,root_roll,"
+                             "root_pitch,root_yaw");
+  MotionTable motion;
+  motion.joint_names.assign(header.begin() + static_cast<std::ptrdiff_t>(fixed.size()), header.end());
+  std::vector<std::vector<double>> rows;
+  for (long number = 2; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    const auto cells = split(line);
+    if (cells.size() != header.size())
+      throw std::runtime_error(name + ": line " + std::to_string(number) + " has " + std::to_string(cells.size()) +
+                               " values, the header " + std::to_string(header.size()));
+    std::vector<double> row(cells.size());
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      char* end = nullptr;
+      row[c] = std::strtod(cells[c].c_str(), &end);
+      if (end == cells[c].c_str())
+        throw std::runtime_error(name + ": line " + std::to_string(number) + ", column " + header[c] +
+                                 ": '" + cells[c] + "' is not a number");
+    }
+    rows.push_back(std::move(row));
+  }
+  motion.values.resize(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(header.size() - 2));
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    motion.frame.push_back(static_cast<long>(rows[r][0]));
+    motion.time.push_back(rows[r][1]);
+    for (std::size_t c = 2; c < rows[r].size(); ++c)
+      motion.values(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c - 2)) = rows[r][c];
+  }
+  return motion;
+}
+
+inline MotionTable load_motion_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the file");
+  return read_motion_csv(in, path);
 }
 
 }  // namespace s2kf::io

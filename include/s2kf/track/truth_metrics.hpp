@@ -1,0 +1,107 @@
+/// @file
+/// Accuracy of an estimated motion against ground truth (spec/evaluation.md): segment-orientation
+/// error, limb flexion error, all-joint error and worst joint, root errors, joint-limit violations.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/pose.hpp>
+#include <s2kf/io/motion_files.hpp>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace s2kf::track {
+
+struct TruthComparison {
+  long frames = 0;                  ///< frames compared (after the warm-up, both finite)
+  double segment_orientation_rms_deg = 0;
+  double limb_flexion_rms_deg = 0;  ///< Sx, Ex, Hx, Kx, Ax of both sides
+  double all_joint_rms_deg = 0;
+  std::string worst_joint;
+  double worst_joint_rms_deg = 0;
+  double root_position_rms_mm = 0;
+  double root_orientation_rms_deg = 0;
+  long joint_limit_violations = 0;  ///< estimated angles outside the model's limits (all frames)
+  std::vector<double> per_frame_joint_rms_deg;  ///< all-joint RMS per compared frame (NaN when skipped)
+  std::vector<std::pair<std::string, double>> segment_rms_deg;  ///< per segment (named by its frame)
+};
+
+inline body::Pose pose_of_row(const io::MotionTable& motion, Eigen::Index row) {
+  body::Pose pose;
+  pose.root_position = motion.values.row(row).segment<3>(0).transpose();
+  pose.root_rpy = motion.values.row(row).segment<3>(3).transpose();
+  pose.joints = motion.values.row(row).tail(body::kJointCount).transpose();
+  return pose;
+}
+
+/// Compares frame by frame (rows with the same index) from `warmup` on. The joint columns of both
+/// tables must match the model's joints. Segments are the frames markers ride on.
+inline TruthComparison compare_with_truth(const body::BodyModel& model, const io::MotionTable& estimate,
+                                          const io::MotionTable& truth, long warmup) {
+  if (estimate.joint_names != model.joint_names() || truth.joint_names != model.joint_names())
+    throw std::invalid_argument("compare_with_truth: joint columns differ from the body model's");
+  std::set<int> segment_frames;
+  for (const body::Marker& marker : model.markers) segment_frames.insert(marker.frame);
+  const double degrees = 180.0 / 3.14159265358979323846;
+  auto angle_between = [](const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+    return Eigen::AngleAxisd(a.transpose() * b).angle();
+  };
+  TruthComparison result;
+  const Eigen::Index rows = std::min(estimate.frames(), truth.frames());
+  const int nj = model.joint_count();
+  Eigen::VectorXd joint_sq = Eigen::VectorXd::Zero(nj);
+  double segment_sq = 0, root_position_sq = 0, root_orientation_sq = 0;
+  std::vector<double> per_segment_sq(model.frame_count(), 0.0);
+  long segment_count = 0;
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const body::Pose est = pose_of_row(estimate, r);
+    if (est.joints.allFinite())
+      for (int j = 0; j < nj; ++j)
+        if (est.joints(j) < model.joints[j].lower - 1e-9 || est.joints(j) > model.joints[j].upper + 1e-9)
+          ++result.joint_limit_violations;
+    result.per_frame_joint_rms_deg.push_back(std::numeric_limits<double>::quiet_NaN());
+    if (r < warmup || !estimate.values.row(r).allFinite() || !truth.values.row(r).allFinite()) continue;
+    const body::Pose tru = pose_of_row(truth, r);
+    const Eigen::ArrayXd diff = (est.joints - tru.joints).array();
+    joint_sq += diff.square().matrix();
+    result.per_frame_joint_rms_deg.back() = std::sqrt(diff.square().mean()) * degrees;
+    const body::FrameTransforms fe = body::joint_frames(model, est), ft = body::joint_frames(model, tru);
+    for (int f : segment_frames) {
+      const double sq = std::pow(angle_between(fe.rotations[f], ft.rotations[f]), 2);
+      segment_sq += sq;
+      per_segment_sq[f] += sq;
+      ++segment_count;
+    }
+    root_position_sq += (est.root_position - tru.root_position).squaredNorm();
+    root_orientation_sq += std::pow(angle_between(est.root_rotation(), tru.root_rotation()), 2);
+    ++result.frames;
+  }
+  if (result.frames == 0) return result;
+  const double n = static_cast<double>(result.frames);
+  result.segment_orientation_rms_deg = std::sqrt(segment_sq / static_cast<double>(segment_count)) * degrees;
+  result.all_joint_rms_deg = std::sqrt(joint_sq.sum() / (n * nj)) * degrees;
+  result.root_position_rms_mm = std::sqrt(root_position_sq / n);
+  result.root_orientation_rms_deg = std::sqrt(root_orientation_sq / n) * degrees;
+  double limb_sq = 0;
+  int limb_count = 0;
+  for (int j = 0; j < nj; ++j) {
+    const double rms = std::sqrt(joint_sq(j) / n) * degrees;
+    if (rms > result.worst_joint_rms_deg) result.worst_joint_rms_deg = rms, result.worst_joint = model.joints[j].name;
+    const std::string& name = model.joints[j].name;
+    const bool flexion = name.size() == 3 && name[2] == 'x' && (name[0] == 'L' || name[0] == 'R') &&
+                         std::string("SEHKA").find(name[1]) != std::string::npos;
+    if (flexion) limb_sq += joint_sq(j), ++limb_count;
+  }
+  result.limb_flexion_rms_deg = std::sqrt(limb_sq / (n * limb_count)) * degrees;
+  for (int f : segment_frames)
+    result.segment_rms_deg.emplace_back(model.frame_name(f), std::sqrt(per_segment_sq[f] / n) * degrees);
+  return result;
+}
+
+}  // namespace s2kf::track
