@@ -1,0 +1,100 @@
+/// @file
+/// The bounded joint parameterisation of the tracker's state: every real parameter Theta maps to an
+/// angle inside the joint's limits, theta = (u - l)/2 sin(Theta) + (u + l)/2.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/core/error.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace s2kf::body {
+
+/// Limits of all joints and the map between parameters Theta and angles theta, vectorised over the
+/// joints. Invariants: lower <= upper elementwise. A joint with upper == lower is fixed: its angle
+/// is lower whatever Theta is (NaN included) and its inverse parameter is 0.
+///
+/// Non-finite parameters: sin(NaN) and sin(+-inf) are NaN, so a movable joint's angle is NaN. That
+/// is deliberate: the filter then reports non_finite_model_output instead of silently tracking a
+/// broken state. Every finite Theta (1e6, -1e9, ...) gives an angle within [lower, upper].
+struct BoundedJoints {
+  Eigen::ArrayXd lower, upper;  ///< rad
+
+  BoundedJoints() = default;
+  BoundedJoints(Eigen::ArrayXd lower_limits, Eigen::ArrayXd upper_limits)
+      : lower(std::move(lower_limits)), upper(std::move(upper_limits)) {
+    if (lower.size() != upper.size())
+      throw DimensionError("BoundedJoints: lower and upper limits differ in size");
+    if (!(lower <= upper).all())
+      throw std::invalid_argument("BoundedJoints: a lower limit is above its upper limit");
+  }
+  explicit BoundedJoints(const BodyModel& model)
+      : BoundedJoints(model.lower_limits(), model.upper_limits()) {}
+
+  Eigen::Index size() const { return lower.size(); }
+  Eigen::ArrayXd half_range() const { return 0.5 * (upper - lower); }
+  Eigen::ArrayXd middle() const { return 0.5 * (upper + lower); }
+
+  /// theta = (u - l)/2 sin(Theta) + (u + l)/2, clamped once more so rounding never leaves the range
+  /// (std::clamp passes NaN through).
+  Eigen::VectorXd angles(const Eigen::Ref<const Eigen::VectorXd>& parameters) const {
+    check(parameters.size(), "angles");
+    Eigen::VectorXd theta(size());
+    for (Eigen::Index j = 0; j < size(); ++j) {
+      const double half = 0.5 * (upper(j) - lower(j));
+      theta(j) = half == 0 ? lower(j)
+                           : std::clamp(half * std::sin(parameters(j)) + 0.5 * (upper(j) + lower(j)),
+                                        lower(j), upper(j));
+    }
+    return theta;
+  }
+
+  /// The parameter on the principal branch, Theta in [-pi/2, pi/2]: asin of the normalised angle,
+  /// clamped to [-1, 1] so angles at or beyond a limit map to +-pi/2. Fixed joints give 0.
+  Eigen::VectorXd parameters(const Eigen::Ref<const Eigen::VectorXd>& angles) const {
+    check(angles.size(), "parameters");
+    Eigen::VectorXd result(size());
+    for (Eigen::Index j = 0; j < size(); ++j) {
+      const double half = 0.5 * (upper(j) - lower(j));
+      if (half == 0) {
+        result(j) = 0;
+        continue;
+      }
+      const double normalised = (angles(j) - 0.5 * (upper(j) + lower(j))) / half;
+      result(j) = std::asin(std::clamp(normalised, -1.0, 1.0));
+    }
+    return result;
+  }
+
+  /// d theta / d Theta = (u - l)/2 cos(Theta) per joint (0 for fixed joints).
+  Eigen::VectorXd derivative(const Eigen::Ref<const Eigen::VectorXd>& parameters) const {
+    check(parameters.size(), "derivative");
+    Eigen::VectorXd result(size());
+    for (Eigen::Index j = 0; j < size(); ++j) {
+      const double half = 0.5 * (upper(j) - lower(j));
+      result(j) = half == 0 ? 0.0 : half * std::cos(parameters(j));
+    }
+    return result;
+  }
+
+  /// Angles within limits? (NaN is not.)
+  bool within_limits(const Eigen::Ref<const Eigen::VectorXd>& angles) const {
+    check(angles.size(), "within_limits");
+    return (angles.array() >= lower && angles.array() <= upper).all();
+  }
+
+ private:
+  void check(Eigen::Index n, const char* where) const {
+    if (n != size())
+      throw DimensionError(std::string("BoundedJoints::") + where + ": " + std::to_string(n) +
+                           " values for " + std::to_string(size()) + " joints");
+  }
+};
+
+}  // namespace s2kf::body

@@ -1,0 +1,254 @@
+/// @file
+/// Forward kinematics of a BodyModel: world frames and marker positions of one pose, of a block of
+/// poses at once (structure-of-arrays, allocation-free with a reusable workspace), and the analytic
+/// Jacobian of the marker positions.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/pose.hpp>
+#include <s2kf/body/vector_sincos.hpp>
+#include <s2kf/core/error.hpp>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace s2kf::body {
+
+/// World rotation and origin (mm) of every frame of a model: index 0 is the root, index j + 1 the
+/// frame after joint j.
+struct FrameTransforms {
+  std::vector<Eigen::Matrix3d> rotations;
+  std::vector<Eigen::Vector3d> origins;
+};
+
+namespace detail {
+inline void check_joint_count(const BodyModel& model, Eigen::Index joints, const char* where) {
+  if (joints != model.joint_count())
+    throw DimensionError(std::string(where) + ": " + std::to_string(joints) +
+                         " joint angles for a model with " + std::to_string(model.joint_count()) + " joints");
+}
+}  // namespace detail
+
+/// Frames of one pose; the root rotation is given as a matrix (any orientation parameterisation).
+inline FrameTransforms joint_frames(const BodyModel& model, const Eigen::Vector3d& root_position,
+                                    const Eigen::Matrix3d& root_rotation,
+                                    const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
+  detail::check_joint_count(model, joint_angles.size(), "joint_frames");
+  FrameTransforms frames;
+  frames.rotations.resize(model.frame_count());
+  frames.origins.resize(model.frame_count());
+  frames.rotations[0] = root_rotation;
+  frames.origins[0] = root_position;
+  for (int j = 0; j < model.joint_count(); ++j) {
+    const Joint& joint = model.joints[j];
+    const int p = joint.parent_frame;
+    frames.origins[j + 1] = frames.origins[p] + frames.rotations[p] * joint.translation;
+    frames.rotations[j + 1] = frames.rotations[p] * axis_rotation(joint.axis, joint_angles(j));
+  }
+  return frames;
+}
+
+inline FrameTransforms joint_frames(const BodyModel& model, const Pose& pose) {
+  return joint_frames(model, pose.root_position, pose.root_rotation(), pose.joints);
+}
+
+/// Marker positions (mm, lab frame), one column per model marker, from already computed frames.
+inline Eigen::Matrix3Xd marker_positions(const BodyModel& model, const FrameTransforms& frames) {
+  Eigen::Matrix3Xd positions(3, model.marker_count());
+  for (int m = 0; m < model.marker_count(); ++m) {
+    const Marker& marker = model.markers[m];
+    positions.col(m) = frames.origins[marker.frame] + frames.rotations[marker.frame] * marker.offset;
+  }
+  return positions;
+}
+
+inline Eigen::Matrix3Xd marker_positions(const BodyModel& model, const Eigen::Vector3d& root_position,
+                                         const Eigen::Matrix3d& root_rotation,
+                                         const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
+  return marker_positions(model, joint_frames(model, root_position, root_rotation, joint_angles));
+}
+
+/// Marker positions (3 x marker_count, mm, lab frame) of one pose.
+inline Eigen::Matrix3Xd marker_positions(const BodyModel& model, const Pose& pose) {
+  return marker_positions(model, joint_frames(model, pose));
+}
+
+/// Jacobian (3 M x (6 + J)) of the stacked marker positions [x0, y0, z0, x1, ...] with respect to
+/// [root position (3), root roll, pitch, yaw (3), joint angles (J)]. A joint moves the markers
+/// downstream of it by w x (p - o), w its world axis and o its centre; roll, pitch and yaw rotate
+/// about Rz Ry e_x, Rz e_y and e_z through the root.
+inline Eigen::MatrixXd marker_jacobian(const BodyModel& model, const Eigen::Vector3d& root_position,
+                                       const Eigen::Vector3d& root_rpy,
+                                       const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
+  const FrameTransforms frames =
+      joint_frames(model, root_position, rotation_from_rpy(root_rpy), joint_angles);
+  const Eigen::Matrix3Xd positions = marker_positions(model, frames);
+  const Eigen::Matrix3d yaw = axis_rotation(Axis::z, root_rpy(2));
+  const Eigen::Matrix3d yaw_pitch = yaw * axis_rotation(Axis::y, root_rpy(1));
+  const Eigen::Vector3d root_axes[3] = {yaw_pitch.col(0), yaw.col(1), Eigen::Vector3d::UnitZ()};
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(3 * model.marker_count(), 6 + model.joint_count());
+  for (int m = 0; m < model.marker_count(); ++m) {
+    const Eigen::Vector3d p = positions.col(m);
+    // Fixed-size blocks: GCC 12 with AVX-512 misreads 3-vectors copied into dynamic blocks (-Warray-bounds).
+    jacobian.block<3, 3>(3 * m, 0).setIdentity();
+    const Eigen::Vector3d from_root = p - root_position;
+    for (int k = 0; k < 3; ++k) jacobian.block<3, 1>(3 * m, 3 + k) = root_axes[k].cross(from_root);
+    for (int f = model.markers[m].frame; f > 0; f = model.joints[f - 1].parent_frame) {
+      const Joint& joint = model.joints[f - 1];
+      const Eigen::Vector3d axis = frames.rotations[f].col(static_cast<int>(joint.axis));
+      jacobian.block<3, 1>(3 * m, 6 + f - 1) = axis.cross(p - frames.origins[f]);
+    }
+  }
+  return jacobian;
+}
+
+inline Eigen::MatrixXd marker_jacobian(const BodyModel& model, const Pose& pose) {
+  return marker_jacobian(model, pose.root_position, pose.root_rpy, pose.joints);
+}
+
+/// Scratch memory of batched forward kinematics (the Pinocchio "Data" to the model's "Model").
+/// Poses are processed in blocks of kBlock; every buffer holds one array of kBlock doubles per
+/// quantity (structure of arrays, arrays kStride apart), so the inner loops run over poses with
+/// unit stride and vectorise.
+/// Its size depends only on the model, so after the first call nothing allocates.
+struct ForwardKinematicsWorkspace {
+  static constexpr Eigen::Index kBlock = 64;
+  /// Arrays are kStride doubles apart: a power-of-two spacing would map the arrays of one pose to
+  /// the same cache sets, and the transposes in and out of the block would thrash the L1 cache.
+  static constexpr Eigen::Index kStride = kBlock + 4;
+
+  // Inputs of one block, filled by the caller of forward_kinematics_block.
+  std::vector<double> root_position;  ///< 3 arrays: x, y, z
+  std::vector<double> root_rotation;  ///< 9 arrays: entry (r, c) at index 3 c + r
+  std::vector<double> angles;         ///< one array per joint (staging for sin_q, cos_q)
+  std::vector<double> sin_q, cos_q;   ///< one array per joint
+  // Results of one block.
+  std::vector<double> rotation;  ///< 9 arrays per frame, entry (r, c) of frame f at 9 f + 3 c + r
+  std::vector<double> origin;    ///< 3 arrays per frame (only frames with their own origin are written)
+  std::vector<double> markers;   ///< 3 arrays per requested marker: x, y, z
+  /// Frames reached by a zero translation share their parent's origin instead of copying it.
+  std::vector<int> origin_frame;
+  /// 0, 1, ..., M - 1: the marker list of a call that wants every marker.
+  std::vector<int> all_markers;
+
+  /// Sizes the buffers for `model` and `marker_count` requested markers (no-op when they fit).
+  void prepare(const BodyModel& model, Eigen::Index marker_count) {
+    const auto size = [](std::vector<double>& buffer, Eigen::Index arrays) {
+      const auto wanted = static_cast<std::size_t>(arrays * kStride);
+      if (buffer.size() != wanted) buffer.assign(wanted, 0.0);
+    };
+    size(root_position, 3);
+    size(root_rotation, 9);
+    size(angles, model.joint_count());
+    size(sin_q, model.joint_count());
+    size(cos_q, model.joint_count());
+    size(rotation, 9 * model.frame_count());
+    size(origin, 3 * model.frame_count());
+    size(markers, 3 * marker_count);
+    origin_frame.resize(model.frame_count());
+    origin_frame[0] = 0;
+    for (int j = 0; j < model.joint_count(); ++j) {
+      const Joint& joint = model.joints[j];
+      origin_frame[j + 1] = joint.translation.isZero(0) ? origin_frame[joint.parent_frame] : j + 1;
+    }
+    all_markers.resize(model.marker_count());
+    for (int m = 0; m < model.marker_count(); ++m) all_markers[m] = m;
+  }
+
+  double* array(std::vector<double>& buffer, Eigen::Index index) { return buffer.data() + index * kStride; }
+};
+
+/// Runs forward kinematics on the first n (<= kBlock) poses staged in `ws` (root_position,
+/// root_rotation, sin_q, cos_q) and writes ws.markers for the markers listed in `marker_indices`
+/// (in that order). `ws.prepare(model, marker_indices.size())` must have been called.
+inline void forward_kinematics_block(const BodyModel& model, const std::vector<int>& marker_indices,
+                                     ForwardKinematicsWorkspace& ws, Eigen::Index n) {
+  using Array = Eigen::Map<Eigen::ArrayXd>;
+  using ConstArray = Eigen::Map<const Eigen::ArrayXd>;
+  auto rotation = [&](int frame, int r, int c) { return ws.array(ws.rotation, 9 * frame + 3 * c + r); };
+  auto origin = [&](int frame, int r) { return ws.array(ws.origin, 3 * ws.origin_frame[frame] + r); };
+
+  for (int k = 0; k < 9; ++k)
+    Array(ws.array(ws.rotation, k), n) = ConstArray(ws.array(ws.root_rotation, k), n);
+  for (int r = 0; r < 3; ++r) Array(origin(0, r), n) = ConstArray(ws.array(ws.root_position, r), n);
+
+  for (int j = 0; j < model.joint_count(); ++j) {
+    const Joint& joint = model.joints[j];
+    const int p = joint.parent_frame, f = j + 1;
+    if (ws.origin_frame[f] == f) {
+      // o_f = o_p + R_p t, skipping the zero components of t (most joints translate along one axis).
+      for (int r = 0; r < 3; ++r) {
+        Array out(origin(f, r), n);
+        out = ConstArray(origin(p, r), n);
+        for (int c = 0; c < 3; ++c)
+          if (joint.translation(c) != 0) out += joint.translation(c) * ConstArray(rotation(p, r, c), n);
+      }
+    }
+    // R_f = R_p * R_axis(q): the axis column is copied, the other two turn by q in their plane.
+    const int a = static_cast<int>(joint.axis);
+    const int u = (a + 1) % 3, v = (a + 2) % 3;  // (y, z) for x, (z, x) for y, (x, y) for z
+    const ConstArray s(ws.array(ws.sin_q, j), n), c(ws.array(ws.cos_q, j), n);
+    for (int r = 0; r < 3; ++r) {
+      const ConstArray pu(rotation(p, r, u), n), pv(rotation(p, r, v), n);
+      Array(rotation(f, r, a), n) = ConstArray(rotation(p, r, a), n);
+      Array(rotation(f, r, u), n) = c * pu + s * pv;
+      Array(rotation(f, r, v), n) = c * pv - s * pu;
+    }
+  }
+
+  for (std::size_t k = 0; k < marker_indices.size(); ++k) {
+    const Marker& marker = model.markers[marker_indices[k]];
+    const int f = marker.frame;
+    for (int r = 0; r < 3; ++r) {
+      Array out(ws.array(ws.markers, 3 * static_cast<Eigen::Index>(k) + r), n);
+      out = ConstArray(origin(f, r), n);
+      for (int c = 0; c < 3; ++c)
+        if (marker.offset(c) != 0) out += marker.offset(c) * ConstArray(rotation(f, r, c), n);
+    }
+  }
+}
+
+/// Batched forward kinematics of L poses: root_positions (3 x L, mm), root_rotations (9 x L, the
+/// rotation matrix entries row-major: row 3 r + c holds R(r, c)), joint_angles (J x L, rad) ->
+/// markers (3 M x L, rows x0, y0, z0, x1, ...; sized by the caller). Does not allocate once `ws`
+/// has seen this model. Equal to marker_positions() per pose up to rounding.
+inline void marker_positions_batch(const BodyModel& model,
+                                   const Eigen::Ref<const Eigen::MatrixXd>& root_positions,
+                                   const Eigen::Ref<const Eigen::MatrixXd>& root_rotations,
+                                   const Eigen::Ref<const Eigen::MatrixXd>& joint_angles,
+                                   ForwardKinematicsWorkspace& ws, Eigen::Ref<Eigen::MatrixXd> markers) {
+  const Eigen::Index count = root_positions.cols();
+  if (root_positions.rows() != 3 || root_rotations.rows() != 9 || root_rotations.cols() != count ||
+      joint_angles.rows() != model.joint_count() || joint_angles.cols() != count ||
+      markers.rows() != 3 * model.marker_count() || markers.cols() != count)
+    throw DimensionError("marker_positions_batch: expected 3 x L positions, 9 x L rotations, " +
+                         std::to_string(model.joint_count()) + " x L joint angles and " +
+                         std::to_string(3 * model.marker_count()) + " x L markers");
+  ws.prepare(model, model.marker_count());
+  constexpr Eigen::Index B = ForwardKinematicsWorkspace::kBlock, S = ForwardKinematicsWorkspace::kStride;
+  for (Eigen::Index start = 0; start < count; start += B) {
+    const Eigen::Index n = std::min(B, count - start);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      for (int r = 0; r < 3; ++r) ws.root_position[r * S + i] = root_positions(r, start + i);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+          ws.root_rotation[(3 * c + r) * S + i] = root_rotations(3 * r + c, start + i);
+    }
+    // Joint angles arrive one pose per column; stage them one joint per array, then take sin and cos.
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (int j = 0; j < model.joint_count(); ++j) ws.angles[j * S + i] = joint_angles(j, start + i);
+    for (int j = 0; j < model.joint_count(); ++j)
+      vector_sincos(ws.array(ws.angles, j), ws.array(ws.sin_q, j), ws.array(ws.cos_q, j), n);
+    forward_kinematics_block(model, ws.all_markers, ws, n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index row = 0; row < markers.rows(); ++row)
+        markers(row, start + i) = ws.markers[row * S + i];
+  }
+}
+
+}  // namespace s2kf::body

@@ -1,0 +1,257 @@
+/// @file
+/// The tracker's measurement model: a block of 46-dimensional states [root position (mm), root
+/// orientation (3), bounded joint parameters Theta (40)] -> the stacked positions of the markers,
+/// evaluated for all samples at once with batched forward kinematics; and the marker noise matrix.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/bounded_joints.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/pose.hpp>
+#include <s2kf/body/vector_sincos.hpp>
+#include <s2kf/core/error.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace s2kf::body {
+
+/// What the three orientation numbers of the state mean.
+enum class OrientationParameterization {
+  /// (roll, pitch, yaw), R = Rz(yaw) Ry(pitch) Rx(roll): the paper's choice; singular at pitch +-90 deg.
+  roll_pitch_yaw,
+  /// A rotation vector delta about a reference orientation the caller sets: R = R_ref Exp(delta).
+  /// Re-centring after each update keeps delta small, so no attitude is singular (handstands).
+  local_rotation_error,
+};
+
+/// Measurement model h(x) = stacked marker positions [x0, y0, z0, x1, ...] (mm) of the selected
+/// markers, for the filter's contract `h(states (n x L), predictions (m x L, sized by the filter))`.
+/// Not thread-safe (it owns its scratch memory); after the first call it does not allocate.
+class MarkerMeasurementModel {
+ public:
+  explicit MarkerMeasurementModel(
+      BodyModel model, OrientationParameterization orientation = OrientationParameterization::roll_pitch_yaw)
+      : model_(std::move(model)), joints_(model_), orientation_(orientation) {
+    model_.validate();
+    selected_.resize(model_.marker_count());
+    for (int m = 0; m < model_.marker_count(); ++m) selected_[m] = m;
+  }
+
+  const BodyModel& model() const { return model_; }
+  const BoundedJoints& bounded_joints() const { return joints_; }
+  OrientationParameterization orientation() const { return orientation_; }
+
+  Eigen::Index state_dimension() const { return 6 + model_.joint_count(); }
+  Eigen::Index measurement_dimension() const { return 3 * static_cast<Eigen::Index>(selected_.size()); }
+
+  /// Predict only these model markers, in this order (e.g. in the order of a recording's labels).
+  void select_markers(std::vector<int> marker_indices) {
+    for (int m : marker_indices)
+      if (m < 0 || m >= model_.marker_count())
+        throw std::invalid_argument("MarkerMeasurementModel: marker index " + std::to_string(m) +
+                                    " is not a marker of the model");
+    selected_ = std::move(marker_indices);
+  }
+  const std::vector<int>& selected_markers() const { return selected_; }
+
+  /// R_ref of the local_rotation_error parameterisation (ignored for roll_pitch_yaw).
+  void set_reference_orientation(const Eigen::Matrix3d& reference) { reference_ = reference; }
+  const Eigen::Matrix3d& reference_orientation() const { return reference_; }
+
+  /// The root rotation that the orientation part of a state stands for.
+  Eigen::Matrix3d root_rotation(const Eigen::Vector3d& orientation_part) const {
+    return orientation_ == OrientationParameterization::roll_pitch_yaw
+               ? rotation_from_rpy(orientation_part)
+               : reference_ * rotation_exp(orientation_part);
+  }
+
+  /// local_rotation_error: moves the orientation of `state` into the reference (R_ref <- R_ref
+  /// Exp(delta)) and sets delta to 0; the represented pose is unchanged. No-op for roll_pitch_yaw.
+  void recenter(Eigen::Ref<Eigen::VectorXd> state) {
+    if (orientation_ != OrientationParameterization::local_rotation_error) return;
+    check_state_size(state.size(), "recenter");
+    reference_ = reference_ * rotation_exp(state.segment<3>(3));
+    state.segment<3>(3).setZero();
+  }
+
+  /// The pose a state stands for (joint angles through the bounded map).
+  Pose pose(const Eigen::Ref<const Eigen::VectorXd>& state) const {
+    check_state_size(state.size(), "pose");
+    detail::check_joint_count(model_, kJointCount, "MarkerMeasurementModel::pose");
+    Pose result;
+    result.root_position = state.head<3>();
+    result.root_rpy = orientation_ == OrientationParameterization::roll_pitch_yaw
+                          ? Eigen::Vector3d(state.segment<3>(3))
+                          : rpy_from_rotation(root_rotation(state.segment<3>(3)));
+    result.joints = joints_.angles(state.tail(model_.joint_count()));
+    return result;
+  }
+
+  /// A state that stands for `pose` (Theta on the principal branch; delta = Log(R_ref^T R)).
+  Eigen::VectorXd state(const Pose& pose) const {
+    detail::check_joint_count(model_, kJointCount, "MarkerMeasurementModel::state");
+    Eigen::VectorXd x(state_dimension());
+    x.head<3>() = pose.root_position;
+    x.segment<3>(3) = orientation_ == OrientationParameterization::roll_pitch_yaw
+                          ? pose.root_rpy
+                          : rotation_log(reference_.transpose() * pose.root_rotation());
+    x.tail(model_.joint_count()) = joints_.parameters(pose.joints);
+    return x;
+  }
+
+  /// predictions.col(i) = h(states.col(i)); predictions must be measurement_dimension() x L. Takes
+  /// Refs so column blocks work too; the filter's (const MatrixXd&, MatrixXd&) binds without copies.
+  void operator()(const Eigen::Ref<const Eigen::MatrixXd>& states, Eigen::Ref<Eigen::MatrixXd> predictions) {
+    const Eigen::Index count = states.cols();
+    check_state_size(states.rows(), "operator()");
+    if (predictions.rows() != measurement_dimension() || predictions.cols() != count)
+      throw DimensionError("MarkerMeasurementModel: predictions must be " +
+                           std::to_string(measurement_dimension()) + " x " + std::to_string(count) +
+                           ", got " + std::to_string(predictions.rows()) + " x " +
+                           std::to_string(predictions.cols()));
+    const int joint_count = model_.joint_count();
+    ws_.prepare(model_, static_cast<Eigen::Index>(selected_.size()));
+    if (orientation_buffer_.size() != static_cast<std::size_t>(9 * S)) orientation_buffer_.assign(9 * S, 0.0);
+
+    for (Eigen::Index start = 0; start < count; start += B) {
+      const Eigen::Index n = std::min(B, count - start);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        for (int r = 0; r < 3; ++r) ws_.root_position[r * S + i] = states(r, start + i);
+        for (int k = 0; k < 3; ++k) orientation_buffer_[k * S + i] = states(3 + k, start + i);
+        for (int j = 0; j < joint_count; ++j) ws_.angles[j * S + i] = states(6 + j, start + i);
+      }
+      if (orientation_ == OrientationParameterization::roll_pitch_yaw)
+        stage_rpy_rotations(n);
+      else
+        stage_local_rotations(n);
+      stage_joint_angles(n);
+      forward_kinematics_block(model_, selected_, ws_, n);
+      for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::Index row = 0; row < predictions.rows(); ++row)
+          predictions(row, start + i) = ws_.markers[row * S + i];
+    }
+  }
+
+ private:
+  static constexpr Eigen::Index B = ForwardKinematicsWorkspace::kBlock;
+  static constexpr Eigen::Index S = ForwardKinematicsWorkspace::kStride;  // spacing of the arrays
+
+  void check_state_size(Eigen::Index n, const char* where) const {
+    if (n != state_dimension())
+      throw DimensionError(std::string("MarkerMeasurementModel::") + where + ": state dimension " +
+                           std::to_string(n) + ", expected " + std::to_string(state_dimension()));
+  }
+
+  // orientation_buffer_ holds roll, pitch, yaw in arrays 0..2; arrays 3..8 receive sines and cosines.
+  void stage_rpy_rotations(Eigen::Index n) {
+    double* o = orientation_buffer_.data();
+    for (int k = 0; k < 3; ++k) vector_sincos(o + k * S, o + (3 + k) * S, o + (6 + k) * S, n);
+    const double *sr = o + 3 * S, *sp = o + 4 * S, *sy = o + 5 * S;
+    const double *cr = o + 6 * S, *cp = o + 7 * S, *cy = o + 8 * S;
+    double* R = ws_.root_rotation.data();  // entry (r, c) at array 3 c + r
+    for (Eigen::Index i = 0; i < n; ++i) {
+      R[0 * S + i] = cy[i] * cp[i];
+      R[1 * S + i] = sy[i] * cp[i];
+      R[2 * S + i] = -sp[i];
+      R[3 * S + i] = cy[i] * sp[i] * sr[i] - sy[i] * cr[i];
+      R[4 * S + i] = sy[i] * sp[i] * sr[i] + cy[i] * cr[i];
+      R[5 * S + i] = cp[i] * sr[i];
+      R[6 * S + i] = cy[i] * sp[i] * cr[i] + sy[i] * sr[i];
+      R[7 * S + i] = sy[i] * sp[i] * cr[i] - cy[i] * sr[i];
+      R[8 * S + i] = cp[i] * cr[i];
+    }
+  }
+
+  // R = R_ref Exp(delta), Exp(delta) = I + a K + b K^2 with K = [delta]x, a = sin t / t,
+  // b = (1 - cos t) / t^2 (series below t = 1e-4, where both are exact to rounding).
+  void stage_local_rotations(Eigen::Index n) {
+    double* o = orientation_buffer_.data();
+    const double *dx = o, *dy = o + S, *dz = o + 2 * S;
+    double *t = o + 3 * S, *st = o + 4 * S, *ct = o + 5 * S;
+    for (Eigen::Index i = 0; i < n; ++i) t[i] = std::sqrt(dx[i] * dx[i] + dy[i] * dy[i] + dz[i] * dz[i]);
+    vector_sincos(t, st, ct, n);
+    double* E = ws_.root_rotation.data();  // Exp(delta) first, entry (r, c) at array 3 c + r
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double t2 = t[i] * t[i];
+      const bool small = t[i] < 1e-4;
+      const double safe_t = small ? 1.0 : t[i];
+      const double a = small ? 1.0 - t2 / 6.0 : st[i] / safe_t;
+      const double b = small ? 0.5 - t2 / 24.0 : (1.0 - ct[i]) / (safe_t * safe_t);
+      const double x = dx[i], y = dy[i], z = dz[i];
+      E[0 * S + i] = 1.0 - b * (y * y + z * z);
+      E[1 * S + i] = a * z + b * x * y;
+      E[2 * S + i] = -a * y + b * x * z;
+      E[3 * S + i] = -a * z + b * x * y;
+      E[4 * S + i] = 1.0 - b * (x * x + z * z);
+      E[5 * S + i] = a * x + b * y * z;
+      E[6 * S + i] = a * y + b * x * z;
+      E[7 * S + i] = -a * x + b * y * z;
+      E[8 * S + i] = 1.0 - b * (x * x + y * y);
+    }
+    // R(r, c) = sum_k R_ref(r, k) E(k, c); the nine E arrays are copied aside first.
+    std::copy(E, E + 9 * S, orientation_buffer_.begin());
+    const double* Ec = orientation_buffer_.data();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        double* out = E + (3 * c + r) * S;
+        const double *e0 = Ec + (3 * c + 0) * S, *e1 = Ec + (3 * c + 1) * S, *e2 = Ec + (3 * c + 2) * S;
+        const double r0 = reference_(r, 0), r1 = reference_(r, 1), r2 = reference_(r, 2);
+        for (Eigen::Index i = 0; i < n; ++i) out[i] = r0 * e0[i] + r1 * e1[i] + r2 * e2[i];
+      }
+  }
+
+  // theta = (u - l)/2 sin(Theta) + (u + l)/2 within [l, u] (NaN passes), then sin and cos of theta.
+  void stage_joint_angles(Eigen::Index n) {
+    for (int j = 0; j < model_.joint_count(); ++j) {
+      double* q = ws_.array(ws_.angles, j);
+      double* s = ws_.array(ws_.sin_q, j);
+      double* c = ws_.array(ws_.cos_q, j);
+      const double lower = joints_.lower(j), upper = joints_.upper(j);
+      const double half = 0.5 * (upper - lower), middle = 0.5 * (upper + lower);
+      if (half == 0) {
+        std::fill(q, q + n, lower);
+      } else {
+        vector_sincos(q, s, c, n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+          const double v = half * s[i] + middle;
+          q[i] = v < lower ? lower : (v > upper ? upper : v);
+        }
+      }
+      vector_sincos(q, s, c, n);
+    }
+  }
+
+  BodyModel model_;
+  BoundedJoints joints_;
+  OrientationParameterization orientation_;
+  Eigen::Matrix3d reference_ = Eigen::Matrix3d::Identity();
+  std::vector<int> selected_;
+  ForwardKinematicsWorkspace ws_;
+  std::vector<double> orientation_buffer_;
+};
+
+/// Diagonal measurement noise R (3 M x 3 M) with the same variance (mm^2) for every coordinate.
+inline Eigen::MatrixXd marker_noise(double variance_mm2, Eigen::Index marker_count) {
+  if (!(variance_mm2 >= 0) || !std::isfinite(variance_mm2) || marker_count < 0)
+    throw std::invalid_argument("marker_noise: the variance must be a finite number >= 0 (mm^2)");
+  return Eigen::VectorXd::Constant(3 * marker_count, variance_mm2).asDiagonal();
+}
+
+/// Diagonal measurement noise R (3 M x 3 M) with one variance (mm^2) per marker, for all 3 coordinates.
+inline Eigen::MatrixXd marker_noise(const Eigen::Ref<const Eigen::VectorXd>& variance_mm2_per_marker) {
+  if (!variance_mm2_per_marker.allFinite() || (variance_mm2_per_marker.array() < 0).any())
+    throw std::invalid_argument("marker_noise: every variance must be a finite number >= 0 (mm^2)");
+  Eigen::VectorXd diagonal(3 * variance_mm2_per_marker.size());
+  for (Eigen::Index m = 0; m < variance_mm2_per_marker.size(); ++m)
+    diagonal.segment<3>(3 * m).setConstant(variance_mm2_per_marker(m));
+  return diagonal.asDiagonal();
+}
+
+}  // namespace s2kf::body

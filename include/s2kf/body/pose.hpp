@@ -1,0 +1,78 @@
+/// @file
+/// A whole-body pose (root position, root roll/pitch/yaw, 40 joint angles) and the conversions
+/// between roll/pitch/yaw, rotation vectors and rotation matrices.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cmath>
+
+namespace s2kf::body {
+
+/// Rotation about one model axis by `angle` (rad).
+inline Eigen::Matrix3d axis_rotation(Axis axis, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  Eigen::Matrix3d r;
+  switch (axis) {
+    case Axis::x:
+      r << 1, 0, 0, 0, c, -s, 0, s, c;
+      break;
+    case Axis::y:
+      r << c, 0, s, 0, 1, 0, -s, 0, c;
+      break;
+    case Axis::z:
+      r << c, -s, 0, s, c, 0, 0, 0, 1;
+      break;
+  }
+  return r;
+}
+
+/// R = Rz(yaw) * Ry(pitch) * Rx(roll), rpy = (roll, pitch, yaw) in rad (the MMM convention).
+inline Eigen::Matrix3d rotation_from_rpy(const Eigen::Vector3d& rpy) {
+  const double cr = std::cos(rpy(0)), sr = std::sin(rpy(0));
+  const double cp = std::cos(rpy(1)), sp = std::sin(rpy(1));
+  const double cy = std::cos(rpy(2)), sy = std::sin(rpy(2));
+  Eigen::Matrix3d r;
+  r << cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,  //
+      sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,   //
+      -sp, cp * sr, cp * cr;
+  return r;
+}
+
+/// The inverse of rotation_from_rpy with pitch in [-pi/2, pi/2], roll and yaw in (-pi, pi]. At
+/// pitch = +-90 deg only roll -+ yaw is defined; then yaw = 0 and roll carries the whole rotation
+/// about the vertical, so rotation_from_rpy(rpy_from_rotation(R)) == R still holds.
+inline Eigen::Vector3d rpy_from_rotation(const Eigen::Matrix3d& r) {
+  const double cos_pitch = std::hypot(r(0, 0), r(1, 0));
+  const double pitch = std::atan2(-r(2, 0), cos_pitch);
+  // Below 1e-6 the neglected terms of the closed form are O(cos_pitch^2) = 1e-12.
+  if (cos_pitch < 1e-6) return {std::atan2(-r(2, 0) * r(0, 1), r(1, 1)), pitch, 0.0};
+  return {std::atan2(r(2, 1), r(2, 2)), pitch, std::atan2(r(1, 0), r(0, 0))};
+}
+
+/// Exp of a rotation vector (axis times angle, rad): the rotation by |v| about v / |v|.
+inline Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& v) {
+  const double angle = v.norm();
+  if (angle == 0) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
+}
+
+/// Log of a rotation matrix: the rotation vector with angle in [0, pi].
+inline Eigen::Vector3d rotation_log(const Eigen::Matrix3d& r) {
+  const Eigen::AngleAxisd angle_axis(r);
+  return angle_axis.angle() * angle_axis.axis();
+}
+
+/// A whole-body pose: the root (pelvis) frame in the lab and the 40 joint angles in state order.
+struct Pose {
+  Eigen::Vector3d root_position = Eigen::Vector3d::Zero();  ///< mm, lab frame
+  Eigen::Vector3d root_rpy = Eigen::Vector3d::Zero();       ///< roll, pitch, yaw (rad)
+  Eigen::Matrix<double, kJointCount, 1> joints = Eigen::Matrix<double, kJointCount, 1>::Zero();  ///< rad
+
+  Eigen::Matrix3d root_rotation() const { return rotation_from_rpy(root_rpy); }
+};
+
+}  // namespace s2kf::body

@@ -1,0 +1,209 @@
+// The tracker's marker measurement model against forward kinematics, in both orientation modes.
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_measurement_model.hpp>
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+#include <random>
+
+// Counts heap allocations while `counting` is set, to check the model allocates only on its first call.
+namespace {
+std::atomic<bool> counting{false};
+std::atomic<long> allocations{0};
+}  // namespace
+
+// The replacements pair malloc with free; GCC cannot see that through the inlined operators.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+void* operator new(std::size_t size) {
+  if (counting) ++allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+
+using namespace s2kf::body;
+
+Eigen::MatrixXd random_states(std::mt19937& rng, Eigen::Index count, double orientation_scale) {
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd states(kStateDimension, count);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    for (int k = 0; k < 3; ++k) states(k, i) = 500 * normal(rng);
+    for (int k = 3; k < 6; ++k) states(k, i) = orientation_scale * normal(rng);
+    for (int k = 6; k < kStateDimension; ++k) states(k, i) = 1.5 * normal(rng);
+  }
+  return states;
+}
+
+Eigen::VectorXd stacked(const Eigen::Matrix3Xd& m) {
+  return Eigen::Map<const Eigen::VectorXd>(m.data(), m.size());
+}
+
+TEST(MarkerMeasurementModel, RollPitchYawModeEqualsForwardKinematicsOfTheBoundedPose) {
+  const BodyModel body = mmm_body_model(1810);
+  MarkerMeasurementModel h(body);
+  ASSERT_EQ(h.state_dimension(), 46);
+  ASSERT_EQ(h.measurement_dimension(), 150);
+  std::mt19937 rng(1);
+  const Eigen::MatrixXd states = random_states(rng, 301, 1.0);
+  Eigen::MatrixXd predictions(150, 301);
+  h(states, predictions);
+  const BoundedJoints bounded(body);
+  for (Eigen::Index i = 0; i < states.cols(); ++i) {
+    const Eigen::VectorXd angles = bounded.angles(states.col(i).tail<kJointCount>());
+    ASSERT_TRUE(bounded.within_limits(angles));
+    const Eigen::Matrix3Xd expected = marker_positions(
+        body, states.col(i).head<3>(), rotation_from_rpy(states.col(i).segment<3>(3)), angles);
+    EXPECT_LT((predictions.col(i) - stacked(expected)).cwiseAbs().maxCoeff(), 1e-9) << i;
+    EXPECT_LT(
+        (stacked(marker_positions(body, h.pose(states.col(i)))) - predictions.col(i)).cwiseAbs().maxCoeff(),
+        1e-9);
+  }
+}
+
+TEST(MarkerMeasurementModel, LocalRotationErrorModeEqualsForwardKinematicsAboutTheReference) {
+  const BodyModel body = mmm_body_model();
+  MarkerMeasurementModel h(body, OrientationParameterization::local_rotation_error);
+  const Eigen::Matrix3d reference =
+      rotation_from_rpy(Eigen::Vector3d(0.4, M_PI / 2, -1.0));  // a handstand-like attitude
+  h.set_reference_orientation(reference);
+  std::mt19937 rng(2);
+  Eigen::MatrixXd states = random_states(rng, 130, 0.5);
+  states.col(0).segment<3>(3).setZero();
+  states.col(1).segment<3>(3) = Eigen::Vector3d(1e-7, -2e-6, 3e-8);  // the small-angle series
+  Eigen::MatrixXd predictions(h.measurement_dimension(), states.cols());
+  h(states, predictions);
+  const BoundedJoints bounded(body);
+  for (Eigen::Index i = 0; i < states.cols(); ++i) {
+    const Eigen::Vector3d delta = states.col(i).segment<3>(3);
+    const Eigen::Matrix3Xd expected =
+        marker_positions(body, states.col(i).head<3>(), reference * rotation_exp(delta),
+                         bounded.angles(states.col(i).tail<kJointCount>()));
+    EXPECT_LT((predictions.col(i) - stacked(expected)).cwiseAbs().maxCoeff(), 1e-9) << i;
+  }
+}
+
+// At pitch = 90 deg roll and yaw turn about the same axis: their marker Jacobian columns are parallel.
+// The local rotation error keeps three independent directions there.
+TEST(MarkerMeasurementModel, LocalRotationErrorStaysFullRankAtPitchNinetyDegrees) {
+  const BodyModel body = mmm_body_model();
+  auto orientation_jacobian = [&](MarkerMeasurementModel& h, const Eigen::VectorXd& x) {
+    Eigen::MatrixXd states(kStateDimension, 6);
+    for (int k = 0; k < 3; ++k) {
+      states.col(2 * k) = x;
+      states.col(2 * k + 1) = x;
+      states(3 + k, 2 * k) += 1e-6;
+      states(3 + k, 2 * k + 1) -= 1e-6;
+    }
+    Eigen::MatrixXd y(h.measurement_dimension(), 6);
+    h(states, y);
+    Eigen::MatrixXd jacobian(h.measurement_dimension(), 3);
+    for (int k = 0; k < 3; ++k) jacobian.col(k) = (y.col(2 * k) - y.col(2 * k + 1)) / 2e-6;
+    return jacobian;
+  };
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(kStateDimension);
+  x(4) = M_PI / 2;
+  MarkerMeasurementModel rpy(body);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> rpy_svd(orientation_jacobian(rpy, x));
+  EXPECT_LT(rpy_svd.singularValues()(2), 1e-6 * rpy_svd.singularValues()(0));
+
+  MarkerMeasurementModel local(body, OrientationParameterization::local_rotation_error);
+  local.set_reference_orientation(rotation_from_rpy(x.segment<3>(3)));
+  x.segment<3>(3).setZero();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> local_svd(orientation_jacobian(local, x));
+  EXPECT_GT(local_svd.singularValues()(2), 0.1 * local_svd.singularValues()(0));
+}
+
+TEST(MarkerMeasurementModel, RecenterKeepsThePredictionAndZeroesTheRotationError) {
+  const BodyModel body = mmm_body_model();
+  MarkerMeasurementModel h(body, OrientationParameterization::local_rotation_error);
+  h.set_reference_orientation(rotation_from_rpy(Eigen::Vector3d(0.1, -M_PI / 2, 0.3)));
+  std::mt19937 rng(3);
+  Eigen::MatrixXd state = random_states(rng, 1, 0.3);
+  Eigen::MatrixXd before(150, 1), after(150, 1);
+  h(state, before);
+  const Pose pose_before = h.pose(state.col(0));
+  Eigen::VectorXd x = state.col(0);
+  h.recenter(x);
+  EXPECT_TRUE(x.segment<3>(3).isZero(0));
+  state.col(0) = x;
+  h(state, after);
+  EXPECT_LT((before - after).cwiseAbs().maxCoeff(), 1e-9);
+  // state(pose) inverts pose(state).
+  const Eigen::VectorXd round_trip = h.state(pose_before);
+  h(round_trip, after);
+  EXPECT_LT((before - after).cwiseAbs().maxCoeff(), 1e-8);
+}
+
+TEST(MarkerMeasurementModel, SelectedMarkersComeInTheRequestedOrder) {
+  const BodyModel body = mmm_body_model();
+  MarkerMeasurementModel all(body), some(body);
+  const std::vector<int> chosen{body.marker_index("RTOE"), body.marker_index("C7"),
+                                body.marker_index("LAOL")};
+  some.select_markers(chosen);
+  ASSERT_EQ(some.measurement_dimension(), 9);
+  std::mt19937 rng(4);
+  const Eigen::MatrixXd states = random_states(rng, 70, 1.0);
+  Eigen::MatrixXd y_all(150, 70), y_some(9, 70);
+  all(states, y_all);
+  some(states, y_some);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(y_some.middleRows(3 * k, 3), y_all.middleRows(3 * chosen[k], 3));
+  EXPECT_THROW(some.select_markers({0, 50}), std::invalid_argument);
+  Eigen::MatrixXd wrong(10, 70);
+  EXPECT_THROW(some(states, wrong), s2kf::DimensionError);
+  EXPECT_THROW(some(Eigen::MatrixXd::Zero(45, 70), y_some), s2kf::DimensionError);
+}
+
+TEST(MarkerMeasurementModel, NaNStatesGiveNaNPredictionsInTheirColumnOnly) {
+  MarkerMeasurementModel h(mmm_body_model());
+  std::mt19937 rng(6);
+  Eigen::MatrixXd states = random_states(rng, 3, 1.0);
+  states(20, 1) = std::numeric_limits<double>::quiet_NaN();
+  Eigen::MatrixXd y(150, 3);
+  h(states, y);
+  EXPECT_TRUE(y.col(0).allFinite());
+  EXPECT_FALSE(y.col(1).allFinite());
+  EXPECT_TRUE(y.col(2).allFinite());
+}
+
+TEST(MarkerMeasurementModel, DoesNotAllocateAfterTheFirstCall) {
+  MarkerMeasurementModel h(mmm_body_model(), OrientationParameterization::local_rotation_error);
+  std::mt19937 rng(5);
+  const Eigen::MatrixXd states = random_states(rng, 301, 1.0);
+  Eigen::MatrixXd y(150, 301);
+  h(states, y);
+  allocations = 0;
+  counting = true;
+  { const std::vector<int> probe(10); }  // the counter itself must see allocations
+  counting = false;
+  ASSERT_EQ(allocations.load(), 1);
+  allocations = 0;
+  counting = true;
+  h(states, y);
+  h(states.leftCols(120), y.leftCols(120));
+  counting = false;
+  EXPECT_EQ(allocations.load(), 0);
+}
+
+TEST(MarkerNoise, IsDiagonalWithThreeEntriesPerMarker) {
+  const Eigen::MatrixXd r = marker_noise(4.0, 50);
+  ASSERT_EQ(r.rows(), 150);
+  EXPECT_TRUE(r.isApprox(4.0 * Eigen::MatrixXd::Identity(150, 150)));
+  const Eigen::MatrixXd per = marker_noise(Eigen::Vector2d(1.0, 9.0));
+  Eigen::VectorXd expected(6);
+  expected << 1, 1, 1, 9, 9, 9;
+  EXPECT_EQ(per, Eigen::MatrixXd(expected.asDiagonal()));
+  EXPECT_THROW(marker_noise(-1.0, 3), std::invalid_argument);
+  EXPECT_THROW(marker_noise(Eigen::Vector2d(1.0, std::nan(""))), std::invalid_argument);
+}
+
+}  // namespace
