@@ -1,0 +1,118 @@
+/// @file
+/// A synthetic recording: a motion played on a subject, seen by a noisy camera system that loses
+/// markers, with the true pose of every frame kept beside the measurements.
+#pragma once
+
+#include <s2kf/body/pose.hpp>
+#include <s2kf/sim/keyframe_motion.hpp>
+#include <s2kf/sim/occlusion.hpp>
+#include <s2kf/sim/random.hpp>
+#include <s2kf/sim/subject.hpp>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace s2kf::sim {
+
+struct RecordingOptions {
+  double frame_rate = 100.0;  ///< Hz
+  /// Number of frames; 0 = the motion's length: floor((t_last - t_first) * rate) + 1, so keyframes
+  /// from 0 to 6.74 s give the paper's 675 frames at 100 Hz. Frames past the last keyframe hold it.
+  Eigen::Index frames = 0;
+  RandomOcclusion occlusion;                     ///< off by default (probability 0)
+  std::vector<SegmentDropout> segment_dropouts;  ///< planned losses of one segment's markers
+  std::vector<Blackout> blackouts;               ///< planned losses of every marker
+};
+
+/// What a simulation produces. Frame k is at time k / frame_rate (0-based, like the tracker's CSV).
+struct Recording {
+  std::string motion_name;
+  double frame_rate = 100.0;
+  std::vector<std::string> marker_names;
+  std::vector<body::Pose> truth;        ///< the subject's true pose per frame (mm, rad)
+  std::vector<Eigen::Matrix3Xd> clean;  ///< markers with placement and soft tissue, before noise (mm)
+  /// clean + sensor noise; hidden markers hold NaN.
+  std::vector<Eigen::Matrix3Xd> measured;
+  Visibility visible;  ///< markers x frames
+
+  Eigen::Index frames() const { return static_cast<Eigen::Index>(truth.size()); }
+  Eigen::Index markers() const { return static_cast<Eigen::Index>(marker_names.size()); }
+  double time(Eigen::Index frame) const { return static_cast<double>(frame) / frame_rate; }
+  double hidden_fraction() const { return visible.size() ? 1.0 - visible.cast<double>().mean() : 0.0; }
+};
+
+/// Stream numbers of the independent random generators (see derive_seed).
+enum class RandomStream : std::uint64_t { noise = 2, occlusion = 3 };  // the subject: SubjectStream
+
+/// The pose of a subject of `height_mm` for a motion sample (root translation scaled from the
+/// reference height).
+inline body::Pose pose_from_sample(const MotionSample& sample, double height_mm) {
+  body::Pose pose;
+  pose.root_position = sample.root_position * (height_mm / kReferenceHeightMm);
+  pose.root_rpy = sample.root_rpy;
+  pose.joints = sample.joints;
+  return pose;
+}
+
+/// Plays `motion` on `subject` and measures it. `seed` drives the sensor noise and the occlusion
+/// (the subject carries its own draws). Throws std::invalid_argument for bad options, naming them.
+inline Recording simulate_recording(const KeyframeMotion& motion, const Subject& subject,
+                                    const RecordingOptions& options, std::uint64_t seed) {
+  if (!(options.frame_rate > 0.0) || !std::isfinite(options.frame_rate))
+    throw std::invalid_argument("the frame rate must be a positive number of Hz");
+  if (options.frames < 0) throw std::invalid_argument("the number of frames must not be negative");
+  validate(options.occlusion);
+  validate_motion(motion, subject.lower, subject.upper, subject.joint_names);
+  const InterpolatedMotion trajectory(motion);
+  const double span = motion.end_time() - motion.start_time();
+  const Eigen::Index frames =
+      options.frames > 0 ? options.frames
+                         : static_cast<Eigen::Index>(std::floor(span * options.frame_rate + 1e-9)) + 1;
+  if (frames > 10'000'000) throw std::invalid_argument("more than 10 million frames requested");
+
+  Recording recording;
+  recording.motion_name = motion.name;
+  recording.frame_rate = options.frame_rate;
+  recording.marker_names = subject.marker_names;
+  const Eigen::Index markers = recording.markers();
+  std::mt19937_64 noise_rng(derive_seed(seed, static_cast<std::uint64_t>(RandomStream::noise)));
+  for (Eigen::Index k = 0; k < frames; ++k) {
+    const double t = static_cast<double>(k) / options.frame_rate;
+    recording.truth.push_back(pose_from_sample(trajectory.at(motion.start_time() + t), subject.height_mm));
+    recording.clean.push_back(subject_marker_positions(subject, recording.truth.back(), t));
+    Eigen::Matrix3Xd measured = recording.clean.back();
+    if (subject.noise_sd_mm > 0.0)
+      for (Eigen::Index m = 0; m < markers; ++m)
+        for (int c = 0; c < 3; ++c) measured(c, m) += subject.noise_sd_mm * standard_normal(noise_rng);
+    recording.measured.push_back(std::move(measured));
+  }
+
+  recording.visible = Visibility::Constant(markers, frames, true);
+  std::mt19937_64 occlusion_rng(derive_seed(seed, static_cast<std::uint64_t>(RandomStream::occlusion)));
+  apply_random_occlusion(recording.visible, options.occlusion, occlusion_rng);
+  for (const SegmentDropout& dropout : options.segment_dropouts) {
+    const std::vector<Eigen::Index> segment_markers = markers_of_segment(subject, dropout.segment);
+    const auto [first, count] = frames_of_interval(dropout.start_s, dropout.duration_s, options.frame_rate);
+    hide(recording.visible, segment_markers, first, count);
+  }
+  std::vector<Eigen::Index> everyone(static_cast<std::size_t>(markers));
+  for (Eigen::Index m = 0; m < markers; ++m) everyone[static_cast<std::size_t>(m)] = m;
+  for (const Blackout& blackout : options.blackouts) {
+    const auto [first, count] = frames_of_interval(blackout.start_s, blackout.duration_s, options.frame_rate);
+    hide(recording.visible, everyone, first, count);
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (Eigen::Index k = 0; k < frames; ++k)
+    for (Eigen::Index m = 0; m < markers; ++m)
+      if (!recording.visible(m, k)) recording.measured[static_cast<std::size_t>(k)].col(m).setConstant(nan);
+  return recording;
+}
+
+}  // namespace s2kf::sim
