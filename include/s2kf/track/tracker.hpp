@@ -8,7 +8,7 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
 #include <s2kf/body/pose.hpp>
-#include <s2kf/core/lcd_sample_set.hpp>
+#include <s2kf/core/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/tracker_options.hpp>
@@ -53,7 +53,7 @@ class Tracker {
         mapping_(std::move(mapping)),
         options_(std::move(options)),
         rate_hz_(rate_hz),
-        filter_(compute_lcd_sample_set(state_dimension(), options_.samples).set),
+        filter_(lcd_sample_set(state_dimension(), options_.samples).set),
         measurement_model_(model_, body::OrientationParameterization::local_rotation_error) {
     options_.validate();
     if (!(rate_hz > 0)) throw std::invalid_argument("the frame rate must be positive");
