@@ -27,7 +27,9 @@ struct CommandResult {
 
 CommandResult run_cli(const std::string& arguments) {
   fs::create_directories(S2KF_TEST_TMP_DIR);
-  const std::string log = std::string(S2KF_TEST_TMP_DIR) + "/simulate_output.txt";
+  // One log per test: ctest runs the tests of this program in parallel processes.
+  const std::string log = std::string(S2KF_TEST_TMP_DIR) + "/simulate_output_" +
+                          ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".txt";
   const std::string command = std::string("\"") + S2KF_CLI + "\" " + arguments + " > \"" + log + "\" 2>&1";
   const int raw = std::system(command.c_str());
   std::ifstream in(log);
