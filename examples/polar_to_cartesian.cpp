@@ -25,8 +25,8 @@ int main() {
       std::fprintf(stderr, "update failed: %s\n", s2kf::to_string(result.status));
       return 1;
     }
-    std::printf("%s (%2d samples): estimate (%.2f, %.2f), NIS %.2f\n", name, static_cast<int>(filter.samples().count()),
-                estimate.mean(0), estimate.mean(1), result.nis);
+    std::printf("%s (%2d samples): estimate (%.2f, %.2f), NIS %.2f\n", name,
+                static_cast<int>(filter.samples().count()), estimate.mean(0), estimate.mean(1), result.nis);
   }
   return 0;
 }

@@ -1,8 +1,8 @@
 // The S2KF against the closed-form Kalman filter, its failure reports, and the iterated update.
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 
-#include <Eigen/LU>
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
 #include <cmath>
 #include <random>
@@ -31,8 +31,8 @@ Eigen::MatrixXd random_matrix(int rows, int cols, std::mt19937_64& rng) {
 }
 
 // Closed-form Kalman update on the observed rows only.
-void kalman_update(GaussianXd& s, const Eigen::MatrixXd& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
-                   const ObservedMask& observed) {
+void kalman_update(GaussianXd& s, const Eigen::MatrixXd& h, const Eigen::VectorXd& y,
+                   const Eigen::MatrixXd& r, const ObservedMask& observed) {
   std::vector<int> rows;
   for (int i = 0; i < observed.size(); ++i)
     if (observed(i)) rows.push_back(i);
@@ -219,8 +219,8 @@ TEST(S2kfFailures, NothingObservedIsANoOp) {
   S2kf filter(s2kf::ukf_sample_set(2));
   GaussianXd s(Eigen::Vector2d(1, 1), Eigen::Matrix2d::Identity());
   LinearModel model{Eigen::MatrixXd::Identity(2, 2), Eigen::VectorXd::Zero(2)};
-  const auto result =
-      filter.update(s, model, Eigen::Vector2d(0, 0), Eigen::MatrixXd::Identity(2, 2), ObservedMask::Constant(2, false));
+  const auto result = filter.update(s, model, Eigen::Vector2d(0, 0), Eigen::MatrixXd::Identity(2, 2),
+                                    ObservedMask::Constant(2, false));
   EXPECT_EQ(result.status, FilterStatus::nothing_observed);
   EXPECT_EQ(result.observed, 0);
   EXPECT_EQ(s.covariance, Eigen::MatrixXd(Eigen::Matrix2d::Identity()));
@@ -300,7 +300,8 @@ TEST(S2kfIterated, PosteriorLinearisationMovesTheMeanCloserToTheExactPosterior) 
   S2kf filter(s2kf::random_sample_set(1, 201, 7));
   const Eigen::MatrixXd r = Eigen::MatrixXd::Constant(1, 1, noise_sd * noise_sd);
   const Eigen::VectorXd yv = Eigen::VectorXd::Constant(1, y);
-  GaussianXd single(Eigen::VectorXd::Constant(1, prior_mean), Eigen::MatrixXd::Constant(1, 1, prior_sd * prior_sd));
+  GaussianXd single(Eigen::VectorXd::Constant(1, prior_mean),
+                    Eigen::MatrixXd::Constant(1, 1, prior_sd * prior_sd));
   GaussianXd iterated = single;
   s2kf::UpdateOptions options;
   options.iterations = 8;

@@ -65,8 +65,8 @@ struct Tracked {
 
 // Tracks `recording` (optionally only its first `frames`) as `s2kf track` does: height from rigid
 // marker pairs, default options.
-Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& truth, Eigen::Index frames = 0,
-                        track::TrackerOptions options = {}) {
+Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& truth,
+                        Eigen::Index frames = 0, track::TrackerOptions options = {}) {
   body::BodyModel model = body::mmm_body_model(1000);
   const track::MarkerMapping mapping = track::map_markers(labels_of(recording), model.marker_names());
   track::HeightEstimator heights(model, mapping);
@@ -104,9 +104,11 @@ std::string simulate(const std::string& name, const std::string& options) {
 }
 
 TEST(MarkerMapping, StripsSubjectPrefixesMatchesCaseInsensitivelyAndReportsTheRest) {
-  const auto mapping = track::map_markers({"Sub:LASI", "rasi", "Foo", "LASI", " C7 "}, {"LASI", "RASI", "C7", "T10"});
+  const auto mapping =
+      track::map_markers({"Sub:LASI", "rasi", "Foo", "LASI", " C7 "}, {"LASI", "RASI", "C7", "T10"});
   EXPECT_EQ(mapping.point_of_marker, (std::vector<int>{0, 1, 4, -1}));
-  EXPECT_EQ(mapping.ignored_labels, (std::vector<std::string>{"Foo", "LASI"}));  // unknown, then the duplicate
+  EXPECT_EQ(mapping.ignored_labels,
+            (std::vector<std::string>{"Foo", "LASI"}));  // unknown, then the duplicate
   EXPECT_EQ(mapping.markers_used(), 3);
 }
 
@@ -120,8 +122,9 @@ TEST(TrackingMetrics, ConvergedFrameIsTheFirstAfterWhichTheDistanceStaysNearItsF
 
 TEST(Tracker, CleanHandstandIsTrackedTightly) {
   // No placement error, soft tissue or segment scaling: only 0.7 mm camera noise, so the model fits.
-  const std::string base = simulate("clean_handstand", "--motion handstand --seed 5 --height 1750 --placement 0 "
-                                                       "--soft-tissue 0 --segment-scale 0 --frames 300");
+  const std::string base = simulate("clean_handstand",
+                                    "--motion handstand --seed 5 --height 1750 --placement 0 "
+                                    "--soft-tissue 0 --segment-scale 0 --frames 300");
   const auto recording = c3d::read_c3d(base + ".c3d");
   const auto truth = io::load_motion_csv(base + "_truth.csv");
   const Tracked t = track_recording(recording, truth);
@@ -144,11 +147,11 @@ TEST(Tracker, BundledHandstandWithRealisticPerturbations) {
   const Tracked t = track_recording(recording, truth);
   EXPECT_EQ(t.run.frames_tracked, 675);
   EXPECT_LE(t.converged, 10);
-  EXPECT_LT(t.level_mm, 30.0);                          // measured 23 mm; the paper: 40-50 mm
-  EXPECT_LT(t.truth.limb_flexion_rms_deg, 4.5);         // measured 3.5
+  EXPECT_LT(t.level_mm, 30.0);                           // measured 23 mm; the paper: 40-50 mm
+  EXPECT_LT(t.truth.limb_flexion_rms_deg, 4.5);          // measured 3.5
   EXPECT_LT(t.truth.segment_orientation_rms_deg, 13.0);  // measured 10.0 (placement error on short segments)
-  EXPECT_LT(t.truth.root_position_rms_mm, 10.0);        // measured 5.7
-  EXPECT_LT(t.truth.root_orientation_rms_deg, 6.0);     // measured 4.3
+  EXPECT_LT(t.truth.root_position_rms_mm, 10.0);         // measured 5.7
+  EXPECT_LT(t.truth.root_orientation_rms_deg, 6.0);      // measured 4.3
   EXPECT_EQ(t.truth.joint_limit_violations, 0);
 }
 
@@ -172,7 +175,7 @@ TEST(Tracker, KeepsTrackingUnderThePapersOcclusionProcess) {
       sum += (complete.frame(f).col(p) - t.run.predicted_markers[f].col(m)).norm();
       ++count;
     }
-  EXPECT_LT(sum / count, 40.0);  // measured about 25 mm; the paper: up to 90 mm
+  EXPECT_LT(sum / count, 40.0);                  // measured about 25 mm; the paper: up to 90 mm
   EXPECT_LT(t.truth.limb_flexion_rms_deg, 7.5);  // measured 5.7
   EXPECT_EQ(t.truth.joint_limit_violations, 0);
 }
@@ -181,12 +184,13 @@ TEST(Tracker, FollowsACartwheelThroughPitchNinetyDegrees) {
   const auto recording = c3d::read_c3d(data("cartwheel.c3d"));
   const auto truth = io::load_motion_csv(data("cartwheel_truth.csv"));
   double max_pitch = 0;
-  for (Eigen::Index r = 0; r < truth.frames(); ++r) max_pitch = std::max(max_pitch, std::abs(truth.values(r, 4)));
+  for (Eigen::Index r = 0; r < truth.frames(); ++r)
+    max_pitch = std::max(max_pitch, std::abs(truth.values(r, 4)));
   EXPECT_GT(max_pitch, 1.5);  // the truth passes through (nearly) +-90 deg
   const Tracked t = track_recording(recording, truth);
-  EXPECT_LT(t.truth.root_orientation_rms_deg, 6.0);  // measured 3.6
+  EXPECT_LT(t.truth.root_orientation_rms_deg, 6.0);      // measured 3.6
   EXPECT_LT(t.truth.segment_orientation_rms_deg, 14.0);  // measured 10.0
-  EXPECT_LT(t.level_mm, 30.0);                      // measured 21
+  EXPECT_LT(t.level_mm, 30.0);                           // measured 21
   EXPECT_EQ(t.truth.joint_limit_violations, 0);
 }
 
@@ -205,17 +209,19 @@ TEST(Tracker, FollowsAFullForwardRoll) {
 }
 
 TEST(Tracker, RecoversAfterEveryMarkerVanishesForOneSecond) {
-  const std::string base = simulate("blackout", "--motion walk --seed 8 --height 1750 --blackout 2,1 --frames 500");
+  const std::string base =
+      simulate("blackout", "--motion walk --seed 8 --height 1750 --blackout 2,1 --frames 500");
   const auto recording = c3d::read_c3d(base + ".c3d");
   const auto truth = io::load_motion_csv(base + "_truth.csv");
   for (Eigen::Index f = 200; f < 300; ++f) ASSERT_FALSE(recording.visible.col(f).any()) << f;
   const Tracked t = track_recording(recording, truth);
   EXPECT_EQ(t.run.frames_tracked, 500);  // predicted through the gap, never dropped
   // Within 30 frames after the markers return, the distance is back near its level before.
-  const double before = track::mean_from(std::vector<double>(t.run.mean_marker_distance.begin() + 100,
-                                                             t.run.mean_marker_distance.begin() + 200), 0);
-  const double after = track::mean_from(std::vector<double>(t.run.mean_marker_distance.begin() + 330,
-                                                            t.run.mean_marker_distance.end()), 0);
+  const double before = track::mean_from(
+      std::vector<double>(t.run.mean_marker_distance.begin() + 100, t.run.mean_marker_distance.begin() + 200),
+      0);
+  const double after = track::mean_from(
+      std::vector<double>(t.run.mean_marker_distance.begin() + 330, t.run.mean_marker_distance.end()), 0);
   EXPECT_LT(after, 1.5 * before) << "before " << before << " after " << after;
   EXPECT_EQ(t.truth.joint_limit_violations, 0);
 }
@@ -267,8 +273,8 @@ TEST(TrackCommand, AgreesWithTheLibraryAndWritesFilesThatParse) {
   std::stringstream text;
   text << json.rdbuf();
   for (const char* key : {"\"frames\"", "\"frames_tracked\"", "\"markers_used\"", "\"labels_ignored\"",
-                          "\"mean_marker_distance_mm\"", "\"converged_frame\"", "\"latency_ms\"", "\"median\"",
-                          "\"p99\"", "\"samples\"", "\"warnings\""})
+                          "\"mean_marker_distance_mm\"", "\"converged_frame\"", "\"latency_ms\"",
+                          "\"median\"", "\"p99\"", "\"samples\"", "\"warnings\""})
     EXPECT_NE(text.str().find(key), std::string::npos) << key;
 
   std::ifstream mot(out.string() + ".mot");
@@ -333,8 +339,8 @@ TEST(TrackCommand, BadInputGivesASentenceAndNonZeroExit) {
 
 TEST(TrackCommand, TracksSeveralRecordingsIntoADirectory) {
   const fs::path out = scratch("batch");
-  const CommandResult r =
-      run_command("track " + data("walk.c3d") + " " + data("cartwheel.c3d") + " --jobs 2 --quiet --out " + out.string());
+  const CommandResult r = run_command("track " + data("walk.c3d") + " " + data("cartwheel.c3d") +
+                                      " --jobs 2 --quiet --out " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(out / "walk.csv"));
   EXPECT_TRUE(fs::exists(out / "cartwheel.bvh"));

@@ -41,7 +41,9 @@ inline double regularized_gamma_p(double a, double x) {
 }
 
 /// P(X <= x) for X ~ chi-square with dof degrees of freedom.
-inline double chi_square_cdf(double x, double dof) { return x <= 0 ? 0.0 : regularized_gamma_p(dof / 2, x / 2); }
+inline double chi_square_cdf(double x, double dof) {
+  return x <= 0 ? 0.0 : regularized_gamma_p(dof / 2, x / 2);
+}
 
 /// The x with chi_square_cdf(x, dof) = probability, by bisection on a bracket (robust, ~60 steps).
 inline double chi_square_quantile(double probability, double dof) {

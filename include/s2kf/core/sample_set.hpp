@@ -40,7 +40,8 @@ inline void correct_moments(Eigen::MatrixXd& z) {
   if (llt_c.info() != Eigen::Success) throw DimensionError("correct_moments: samples do not span the space");
   const Eigen::MatrixXd c_inv = llt_c.solve(Eigen::MatrixXd::Identity(c.rows(), c.cols()));
   Eigen::LLT<Eigen::MatrixXd> llt_inv(c_inv);
-  if (llt_inv.info() != Eigen::Success) throw DimensionError("correct_moments: samples do not span the space");
+  if (llt_inv.info() != Eigen::Success)
+    throw DimensionError("correct_moments: samples do not span the space");
   const Eigen::MatrixXd a = llt_inv.matrixL();
   z = (a.transpose() * z).eval();
 }

@@ -24,11 +24,14 @@ namespace s2kf::io {
 /// Rz(yaw) Ry(pitch) Rx(roll) becomes "Yrotation Zrotation Xrotation" = (yaw, -pitch, roll).
 /// Frames without a finite pose (not tracked) repeat the nearest tracked pose, since BVH has no
 /// notion of a missing frame.
-inline void write_bvh(std::ostream& out, const body::BodyModel& model, const MotionTable& motion, double rate_hz) {
+inline void write_bvh(std::ostream& out, const body::BodyModel& model, const MotionTable& motion,
+                      double rate_hz) {
   motion.check();
   if (static_cast<int>(motion.joint_names.size()) != model.joint_count())
     throw std::invalid_argument("write_bvh: the motion's joints do not match the body model");
-  auto to_bvh = [](const Eigen::Vector3d& v) -> Eigen::Vector3d { return Eigen::Vector3d(v.x(), v.z(), -v.y()) / 10.0; };
+  auto to_bvh = [](const Eigen::Vector3d& v) -> Eigen::Vector3d {
+    return Eigen::Vector3d(v.x(), v.z(), -v.y()) / 10.0;
+  };
   const double degrees = 180.0 / 3.14159265358979323846;
 
   // One BVH joint per anatomical group (BP, BT, LS, ...): its DoFs are consecutive joints.
@@ -67,7 +70,8 @@ inline void write_bvh(std::ostream& out, const body::BodyModel& model, const Mot
   const std::function<void(int, int)> write_group = [&](int g, int depth) {
     const std::string pad(2 * depth, ' ');
     const Eigen::Vector3d offset = to_bvh(groups[g].offset);
-    out << pad << "JOINT " << groups[g].name << "\n" << pad << "{\n"
+    out << pad << "JOINT " << groups[g].name << "\n"
+        << pad << "{\n"
         << pad << "  OFFSET " << offset.x() << " " << offset.y() << " " << offset.z() << "\n"
         << pad << "  CHANNELS 3 Xrotation Yrotation Zrotation\n";
     order.push_back(g);
@@ -81,15 +85,18 @@ inline void write_bvh(std::ostream& out, const body::BodyModel& model, const Mot
         if (marker.frame == last_frame) tip += marker.offset, ++count;
       if (count) tip /= count;
       const Eigen::Vector3d end = to_bvh(tip);
-      out << pad << "  End Site\n" << pad << "  {\n"
-          << pad << "    OFFSET " << end.x() << " " << end.y() << " " << end.z() << "\n" << pad << "  }\n";
+      out << pad << "  End Site\n"
+          << pad << "  {\n"
+          << pad << "    OFFSET " << end.x() << " " << end.y() << " " << end.z() << "\n"
+          << pad << "  }\n";
     }
     out << pad << "}\n";
   };
   for (std::size_t g = 0; g < groups.size(); ++g)
     if (groups[g].parent < 0) write_group(static_cast<int>(g), 1);
   out << "}\nMOTION\nFrames: " << motion.frames() << "\nFrame Time: " << std::setprecision(8) << 1.0 / rate_hz
-      << "\n" << std::setprecision(4);
+      << "\n"
+      << std::setprecision(4);
 
   // Rows to print: each untracked row takes the nearest tracked one (earlier ones the first).
   std::vector<Eigen::Index> source(motion.frames(), -1);
@@ -113,9 +120,15 @@ inline void write_bvh(std::ostream& out, const body::BodyModel& model, const Mot
       for (int j : groups[g].dofs) {
         const double q = v(6 + j) * degrees;
         switch (model.joints[j].axis) {
-          case body::Axis::x: channel[0] = q; break;
-          case body::Axis::z: channel[1] = q; break;
-          case body::Axis::y: channel[2] = -q; break;
+          case body::Axis::x:
+            channel[0] = q;
+            break;
+          case body::Axis::z:
+            channel[1] = q;
+            break;
+          case body::Axis::y:
+            channel[2] = -q;
+            break;
         }
       }
       out << " " << channel[0] << " " << channel[1] << " " << channel[2];
@@ -124,7 +137,8 @@ inline void write_bvh(std::ostream& out, const body::BodyModel& model, const Mot
   }
 }
 
-inline void save_bvh(const std::string& path, const body::BodyModel& model, const MotionTable& motion, double rate_hz) {
+inline void save_bvh(const std::string& path, const body::BodyModel& model, const MotionTable& motion,
+                     double rate_hz) {
   write_file_atomically(path, [&](std::ostream& out) { write_bvh(out, model, motion, rate_hz); });
 }
 

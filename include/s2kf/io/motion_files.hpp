@@ -11,11 +11,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
-#include <istream>
-#include <sstream>
 #include <iomanip>
+#include <istream>
 #include <limits>
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -40,7 +40,8 @@ struct MotionTable {
 
 /// The CSV header: frame,time,root_x,root_y,root_z,root_roll,root_pitch,root_yaw,<joints>.
 inline std::vector<std::string> motion_columns(const std::vector<std::string>& joint_names) {
-  std::vector<std::string> columns{"frame", "time", "root_x", "root_y", "root_z", "root_roll", "root_pitch", "root_yaw"};
+  std::vector<std::string> columns{"frame",  "time",      "root_x",     "root_y",
+                                   "root_z", "root_roll", "root_pitch", "root_yaw"};
   columns.insert(columns.end(), joint_names.begin(), joint_names.end());
   return columns;
 }
@@ -113,7 +114,8 @@ inline MotionTable read_motion_csv(std::istream& in, const std::string& name) {
   const auto header = split(line);
   const std::vector<std::string> fixed = motion_columns({});
   if (header.size() < fixed.size() || !std::equal(fixed.begin(), fixed.end(), header.begin()))
-    throw std::runtime_error(name + ": the header does not start with frame,time,root_x,root_y,root_z,root_roll,"
+    throw std::runtime_error(name +
+                             ": the header does not start with frame,time,root_x,root_y,root_z,root_roll,"
                              "root_pitch,root_yaw");
   MotionTable motion;
   motion.joint_names.assign(header.begin() + static_cast<std::ptrdiff_t>(fixed.size()), header.end());
@@ -123,15 +125,16 @@ inline MotionTable read_motion_csv(std::istream& in, const std::string& name) {
     if (line.empty()) continue;
     const auto cells = split(line);
     if (cells.size() != header.size())
-      throw std::runtime_error(name + ": line " + std::to_string(number) + " has " + std::to_string(cells.size()) +
-                               " values, the header " + std::to_string(header.size()));
+      throw std::runtime_error(name + ": line " + std::to_string(number) + " has " +
+                               std::to_string(cells.size()) + " values, the header " +
+                               std::to_string(header.size()));
     std::vector<double> row(cells.size());
     for (std::size_t c = 0; c < cells.size(); ++c) {
       char* end = nullptr;
       row[c] = std::strtod(cells[c].c_str(), &end);
       if (end == cells[c].c_str())
-        throw std::runtime_error(name + ": line " + std::to_string(number) + ", column " + header[c] +
-                                 ": '" + cells[c] + "' is not a number");
+        throw std::runtime_error(name + ": line " + std::to_string(number) + ", column " + header[c] + ": '" +
+                                 cells[c] + "' is not a number");
     }
     rows.push_back(std::move(row));
   }

@@ -21,7 +21,8 @@ namespace s2kf::track {
 /// returns model height x median ratio. Without any such pair it returns nothing.
 class HeightEstimator {
  public:
-  HeightEstimator(const body::BodyModel& model, MarkerMapping mapping) : mapping_(std::move(mapping)), height_(model.height_mm) {
+  HeightEstimator(const body::BodyModel& model, MarkerMapping mapping)
+      : mapping_(std::move(mapping)), height_(model.height_mm) {
     const Eigen::Matrix3Xd zero = body::marker_positions(model, body::Pose{});
     for (int a = 0; a < model.marker_count(); ++a)
       for (int b = a + 1; b < model.marker_count(); ++b) {

@@ -18,7 +18,8 @@ struct MarkerMapping {
   std::vector<std::string> ignored_labels;
 
   int markers_used() const {
-    return static_cast<int>(std::count_if(point_of_marker.begin(), point_of_marker.end(), [](int p) { return p >= 0; }));
+    return static_cast<int>(
+        std::count_if(point_of_marker.begin(), point_of_marker.end(), [](int p) { return p >= 0; }));
   }
 };
 
@@ -37,7 +38,8 @@ inline std::string strip_subject_prefix(const std::string& label) {
 inline MarkerMapping map_markers(const std::vector<std::string>& recording_labels,
                                  const std::vector<std::string>& model_marker_names) {
   auto upper = [](std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
     return s;
   };
   MarkerMapping mapping;

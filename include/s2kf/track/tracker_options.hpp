@@ -14,9 +14,10 @@ namespace s2kf::track {
 struct TrackerOptions {
   int samples = 301;  ///< S2KF sample count L (odd: symmetric set plus the origin)
 
-  double marker_noise_mm = 10.0;  ///< per-coordinate SD of a marker against the model (placement, soft tissue, noise)
+  double marker_noise_mm =
+      10.0;  ///< per-coordinate SD of a marker against the model (placement, soft tissue, noise)
 
-  double position_speed_mm_per_s = 1500.0;  ///< random-walk SD of the root position per second
+  double position_speed_mm_per_s = 1500.0;   ///< random-walk SD of the root position per second
   double orientation_speed_rad_per_s = 6.0;  ///< random-walk SD of the root orientation per second
   double joint_speed_per_s = 8.0;            ///< random-walk SD of the joint parameters Theta per second
 
@@ -57,12 +58,12 @@ inline TrackerOptions paper_preset(double rate_hz) {
   o.preset = "paper";
   o.samples = 301;
   o.marker_noise_mm = 10.0;
-  o.position_speed_mm_per_s = 5.0 * rate_hz;         // 25 mm^2 per frame
-  o.orientation_speed_rad_per_s = 1e-5 * rate_hz;    // 1e-10 rad^2 per frame
-  o.joint_speed_per_s = 1e-5 * rate_hz;              // 1e-10 per frame
-  o.initial_orientation_sd_rad = 1e-3;               // 1e-6
-  o.initial_joint_sd = 1e-5;                         // 1e-10
-  o.initial_position_sd_mm = 300.0;                  // replaced by the marker spread at start
+  o.position_speed_mm_per_s = 5.0 * rate_hz;       // 25 mm^2 per frame
+  o.orientation_speed_rad_per_s = 1e-5 * rate_hz;  // 1e-10 rad^2 per frame
+  o.joint_speed_per_s = 1e-5 * rate_hz;            // 1e-10 per frame
+  o.initial_orientation_sd_rad = 1e-3;             // 1e-6
+  o.initial_joint_sd = 1e-5;                       // 1e-10
+  o.initial_position_sd_mm = 300.0;                // replaced by the marker spread at start
   o.rigid_initialisation = false;
   o.initial_iterations = 1;
   o.converging_frames = 0;

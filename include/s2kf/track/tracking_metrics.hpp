@@ -12,7 +12,8 @@ namespace s2kf::track {
 
 /// The q-quantile (0..1) of the finite values, linear interpolation; NaN when there are none.
 inline double quantile(std::vector<double> values, double q) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }),
+               values.end());
   if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
   std::sort(values.begin(), values.end());
   const double position = q * static_cast<double>(values.size() - 1);
@@ -23,7 +24,8 @@ inline double quantile(std::vector<double> values, double q) {
 
 /// The final level of a per-frame distance series: the median over its second half (finite values).
 inline double final_level(const std::vector<double>& distance) {
-  std::vector<double> tail(distance.begin() + static_cast<std::ptrdiff_t>(distance.size() / 2), distance.end());
+  std::vector<double> tail(distance.begin() + static_cast<std::ptrdiff_t>(distance.size() / 2),
+                           distance.end());
   return quantile(tail, 0.5);
 }
 

@@ -19,7 +19,7 @@
 namespace s2kf::track {
 
 struct TruthComparison {
-  long frames = 0;                  ///< frames compared (after the warm-up, both finite)
+  long frames = 0;  ///< frames compared (after the warm-up, both finite)
   double segment_orientation_rms_deg = 0;
   double limb_flexion_rms_deg = 0;  ///< Sx, Ex, Hx, Kx, Ax of both sides
   double all_joint_rms_deg = 0;
@@ -27,7 +27,7 @@ struct TruthComparison {
   double worst_joint_rms_deg = 0;
   double root_position_rms_mm = 0;
   double root_orientation_rms_deg = 0;
-  long joint_limit_violations = 0;  ///< estimated angles outside the model's limits (all frames)
+  long joint_limit_violations = 0;              ///< estimated angles outside the model's limits (all frames)
   std::vector<double> per_frame_joint_rms_deg;  ///< all-joint RMS per compared frame (NaN when skipped)
   std::vector<std::pair<std::string, double>> segment_rms_deg;  ///< per segment (named by its frame)
 };
@@ -92,7 +92,8 @@ inline TruthComparison compare_with_truth(const body::BodyModel& model, const io
   int limb_count = 0;
   for (int j = 0; j < nj; ++j) {
     const double rms = std::sqrt(joint_sq(j) / n) * degrees;
-    if (rms > result.worst_joint_rms_deg) result.worst_joint_rms_deg = rms, result.worst_joint = model.joints[j].name;
+    if (rms > result.worst_joint_rms_deg)
+      result.worst_joint_rms_deg = rms, result.worst_joint = model.joints[j].name;
     const std::string& name = model.joints[j].name;
     const bool flexion = name.size() == 3 && name[2] == 'x' && (name[0] == 'L' || name[0] == 'R') &&
                          std::string("SEHKA").find(name[1]) != std::string::npos;
