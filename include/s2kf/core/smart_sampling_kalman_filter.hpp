@@ -13,6 +13,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -36,7 +37,7 @@ struct UpdateOptions {
 struct UpdateResult {
   FilterStatus status = FilterStatus::ok;
   double nis = std::numeric_limits<double>::quiet_NaN();  ///< normalised innovation squared t^T t
-  Eigen::Index observed = 0;                             ///< number of observed components used
+  Eigen::Index observed = 0;                              ///< number of observed components used
   bool ok() const { return status == FilterStatus::ok; }
 };
 
@@ -57,10 +58,12 @@ class SmartSamplingKalmanFilter {
     if (samples_.count() < 1 || samples_.dimension() < 1 || samples_.weights.size() != samples_.count())
       throw DimensionError("SmartSamplingKalmanFilter: the sample set is empty or its weights do not match");
     if (Dim != Eigen::Dynamic && samples_.dimension() != Dim)
-      throw DimensionError("SmartSamplingKalmanFilter: sample dimension " + std::to_string(samples_.dimension()) +
-                           " differs from the state dimension " + std::to_string(Dim));
+      throw DimensionError("SmartSamplingKalmanFilter: sample dimension " +
+                           std::to_string(samples_.dimension()) + " differs from the state dimension " +
+                           std::to_string(Dim));
     positive_weights_ = (samples_.weights.array() > 0).all();
     sqrt_weights_ = samples_.weights.array().abs().sqrt().matrix();
+    detect_symmetry();
   }
 
   const SampleSet& samples() const { return samples_; }
@@ -107,7 +110,8 @@ class SmartSamplingKalmanFilter {
   template <typename MeasurementModel>
   UpdateResult update(State& state, MeasurementModel&& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
                       const UpdateOptions& options = {}) {
-    return update(state, std::forward<MeasurementModel>(h), y, r, ObservedMask::Constant(y.size(), true), options);
+    return update(state, std::forward<MeasurementModel>(h), y, r, ObservedMask::Constant(y.size(), true),
+                  options);
   }
 
   /// Measurement update with a mask of observed components. On any status but ok the state is
@@ -121,7 +125,8 @@ class SmartSamplingKalmanFilter {
       throw DimensionError("update: the state has dimension " + std::to_string(n) + " but the samples " +
                            std::to_string(samples_.dimension()));
     check_square(r, m, "update: R");
-    if (observed.size() != m) throw DimensionError("update: the observed mask must have one entry per component");
+    if (observed.size() != m)
+      throw DimensionError("update: the observed mask must have one entry per component");
     if (options.iterations < 1) throw DimensionError("update: iterations must be at least 1");
 
     UpdateResult result;
@@ -148,13 +153,28 @@ class SmartSamplingKalmanFilter {
       for (Eigen::Index i = j; i < mo; ++i) cyy(i, j) = r(index_(i), index_(j));
     auto cyx = cyx_buffer(mo, n);
     auto y_dev = y_dev_.topRows(mo);
-    if (positive_weights_) {
-      y_dev = y_dev * sqrt_weights_.asDiagonal();
-      cyy.template selfadjointView<Eigen::Lower>().rankUpdate(y_dev);
+    if (symmetric_) {
+      // Pairs +s_k, -s_k with equal weights: sum over a pair of w (y_i - y^)(x_i - m)^T is
+      // w (y+_k - y-_k) s_k^T (y^ cancels), so Cyx costs half the product over all samples.
+      scale_columns_by_sqrt_weights(y_dev);
+      rank_update_lower(cyy, y_dev);
+      const Eigen::Index h = half_count_;
+      auto pair_difference = pair_difference_.topRows(mo);
+      pair_difference.noalias() = y_dev.middleCols(origin_count_, h) - y_dev.rightCols(h);
+      half_deviation_ = half_deviation_ * sqrt_weights_.segment(origin_count_, h).asDiagonal();
+      cyx.setZero();
+      for (Eigen::Index k = 0; k < h; k += kChunk) {
+        const Eigen::Index c = std::min(kChunk, h - k);
+        cyx.noalias() += pair_difference.middleCols(k, c) * half_deviation_.middleCols(k, c).transpose();
+      }
+    } else if (positive_weights_) {
+      scale_columns_by_sqrt_weights(y_dev);
+      rank_update_lower(cyy, y_dev);
       x_dev_ = x_dev_ * sqrt_weights_.asDiagonal();
       cyx.noalias() = y_dev * x_dev_.transpose();
     } else {
-      cyy.template triangularView<Eigen::Lower>() += y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
+      cyy.template triangularView<Eigen::Lower>() +=
+          y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
       cyx.noalias() = y_dev * samples_.weights.asDiagonal() * x_dev_.transpose();
     }
 
@@ -166,7 +186,7 @@ class SmartSamplingKalmanFilter {
     }
     auto innovation = innovation_.head(mo);
     for (Eigen::Index k = 0; k < mo; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
-    llt.matrixL().solveInPlace(cyx);
+    solve_lower_in_place(llt.matrixLLT(), cyx);
     llt.matrixL().solveInPlace(innovation);
     result.nis = innovation.squaredNorm();
     if (gated(result.nis, mo, options)) {
@@ -191,8 +211,9 @@ class SmartSamplingKalmanFilter {
  private:
   static void check_square(const Eigen::MatrixXd& a, Eigen::Index n, const char* what) {
     if (a.rows() != n || a.cols() != n)
-      throw DimensionError(std::string(what) + " is " + std::to_string(a.rows()) + "x" + std::to_string(a.cols()) +
-                           ", expected " + std::to_string(n) + "x" + std::to_string(n));
+      throw DimensionError(std::string(what) + " is " + std::to_string(a.rows()) + "x" +
+                           std::to_string(a.cols()) + ", expected " + std::to_string(n) + "x" +
+                           std::to_string(n));
   }
 
   template <typename Matrix>
@@ -219,11 +240,79 @@ class SmartSamplingKalmanFilter {
       throw DimensionError("the state has dimension " + std::to_string(mean.size()) + " but the samples " +
                            std::to_string(samples_.dimension()));
     factor_.compute(covariance);
-    if (factor_.info() != Eigen::Success || !mean.allFinite()) return FilterStatus::prior_not_positive_definite;
+    if (factor_.info() != Eigen::Success || !mean.allFinite())
+      return FilterStatus::prior_not_positive_definite;
+    if (symmetric_ && !keep_full_deviations_) {
+      // S (-z) = -(S z) exactly: map the half set only, then mirror it.
+      const Eigen::Index h = half_count_, o = origin_count_;
+      half_deviation_.resize(mean.size(), h);
+      for (Eigen::Index k = 0; k < h; k += kChunk) {
+        const Eigen::Index c = std::min(kChunk, h - k);
+        half_deviation_.middleCols(k, c).noalias() = factor_.matrixL() * samples_.points.middleCols(o + k, c);
+      }
+      x_.resize(mean.size(), samples_.count());
+      if (o == 1) x_.col(0) = mean;
+      x_.middleCols(o, h) = half_deviation_.colwise() + mean;
+      x_.rightCols(h) = (-half_deviation_).colwise() + mean;
+      return FilterStatus::ok;
+    }
     x_dev_.noalias() = factor_.matrixL() * samples_.points;
     x_ = x_dev_;
     x_.colwise() += mean;
     return FilterStatus::ok;
+  }
+
+  /// Recognises the symmetric layout of symmetric_set and ukf_sample_set: an optional origin first,
+  /// then +s_1..+s_h, then -s_1..-s_h, with equal weights within each pair (exact comparisons).
+  void detect_symmetry() {
+    const Eigen::Index count = samples_.count();
+    origin_count_ = count % 2;
+    half_count_ = count / 2;
+    const Eigen::Index h = half_count_, o = origin_count_;
+    symmetric_ = positive_weights_ && h > 0 && (o == 0 || samples_.points.col(0).isZero(0)) &&
+                 samples_.points.middleCols(o, h) == -samples_.points.rightCols(h) &&
+                 samples_.weights.segment(o, h) == samples_.weights.tail(h);
+    equal_weights_ = (samples_.weights.array() == samples_.weights(0)).all();
+  }
+
+  /// Eigen's matrix products take their packing buffers from the stack up to 128 KiB and from the
+  /// heap beyond; products over at most kChunk samples (150 x 96 doubles) stay on the stack, so a
+  /// step does not allocate. Measured no slower than one product over all samples.
+  static constexpr Eigen::Index kChunk = 96;
+
+  /// Lower half of c += d d^T, as rank-kChunk updates.
+  template <typename Target, typename Deviations>
+  static void rank_update_lower(Target& c, const Deviations& d) {
+    for (Eigen::Index k = 0; k < d.cols(); k += kChunk)
+      c.template selfadjointView<Eigen::Lower>().rankUpdate(d.middleCols(k, std::min(kChunk, d.cols() - k)));
+  }
+
+  /// B := L^-1 B for the lower triangle L of `lower`. Eigen packs the whole triangle of a
+  /// triangular matrix solve into one buffer, which leaves the stack (128 KiB) beyond about 128
+  /// rows; larger systems are split in halves, X1 = L11^-1 B1, B2 -= L21 X1, X2 = L22^-1 B2, so
+  /// every piece stays on the stack and a step does not allocate.
+  static void solve_lower_in_place(const Eigen::Ref<const Eigen::MatrixXd>& lower,
+                                   Eigen::Ref<Eigen::MatrixXd> b) {
+    const Eigen::Index n = lower.rows();
+    if (n <= kChunk) {
+      lower.template triangularView<Eigen::Lower>().solveInPlace(b);
+      return;
+    }
+    const Eigen::Index h = n / 2;
+    auto top = b.topRows(h);
+    auto bottom = b.bottomRows(n - h);
+    solve_lower_in_place(lower.topLeftCorner(h, h), top);
+    bottom.noalias() -= lower.bottomLeftCorner(n - h, h) * top;
+    solve_lower_in_place(lower.bottomRightCorner(n - h, n - h), bottom);
+  }
+
+  /// Columns times sqrt(w_i); one scalar when all weights are equal.
+  template <typename Block>
+  void scale_columns_by_sqrt_weights(Block& block) const {
+    if (equal_weights_)
+      block *= sqrt_weights_(0);
+    else
+      block = block * sqrt_weights_.asDiagonal();
   }
 
   /// Runs h on the current samples, keeps the observed rows as deviations from their weighted mean.
@@ -232,8 +321,18 @@ class SmartSamplingKalmanFilter {
     const Eigen::Index mo = observed_count_;
     predictions_.resize(m, samples_.count());
     h(static_cast<const Eigen::MatrixXd&>(x_), predictions_);
-    y_dev_.resize(std::max<Eigen::Index>(y_dev_.rows(), m), samples_.count());
-    for (Eigen::Index k = 0; k < mo; ++k) y_dev_.row(k) = predictions_.row(index_(k));
+    const Eigen::Index count = samples_.count();
+    if (y_dev_.rows() < m || y_dev_.cols() != count)
+      y_dev_.resize(std::max<Eigen::Index>(y_dev_.rows(), m), count);
+    if (symmetric_ && (pair_difference_.rows() < m || pair_difference_.cols() != half_count_))
+      pair_difference_.resize(std::max<Eigen::Index>(pair_difference_.rows(), m), half_count_);
+    // Gather the observed rows a column at a time (both matrices are column-major).
+    const Eigen::Index* index = index_.data();
+    for (Eigen::Index i = 0; i < count; ++i) {
+      const double* from = predictions_.col(i).data();
+      double* to = y_dev_.col(i).data();
+      for (Eigen::Index k = 0; k < mo; ++k) to[k] = from[index[k]];
+    }
     auto y_dev = y_dev_.topRows(mo);
     if (!y_dev.allFinite()) return FilterStatus::non_finite_model_output;
     y_mean_.resize(std::max<Eigen::Index>(y_mean_.size(), m));
@@ -273,6 +372,11 @@ class SmartSamplingKalmanFilter {
     }
     Eigen::VectorXd mean = state.mean;
     Eigen::MatrixXd covariance = state.covariance;
+    keep_full_deviations_ = true;  // this rarely used path works on all deviations
+    struct Restore {
+      bool& flag;
+      ~Restore() { flag = false; }
+    } restore{keep_full_deviations_};
     for (int pass = 0; pass < options.iterations; ++pass) {
       if ((result.status = draw_samples(mean, covariance)) != FilterStatus::ok) return result;
       if ((result.status = evaluate_observed(h, m)) != FilterStatus::ok) return result;
@@ -313,11 +417,17 @@ class SmartSamplingKalmanFilter {
 
   SampleSet samples_;
   bool positive_weights_ = true;
+  bool equal_weights_ = false;
+  bool symmetric_ = false;             ///< see detect_symmetry
+  bool keep_full_deviations_ = false;  ///< draw_samples fills x_dev_ even for a symmetric set
+  Eigen::Index origin_count_ = 0, half_count_ = 0;
   Eigen::VectorXd sqrt_weights_;
 
   // Scratch space, grown to the largest sizes seen and then reused.
   Eigen::LLT<Eigen::MatrixXd> factor_;
   Eigen::MatrixXd x_dev_, x_, propagated_, predictions_, y_dev_, cyy_, cyx_, posterior_covariance_;
+  Eigen::MatrixXd half_deviation_;   ///< S z_k of the +s half of a symmetric set (then times sqrt w)
+  Eigen::MatrixXd pair_difference_;  ///< sqrt(w) (y+_k - y-_k) of the observed rows
   Eigen::VectorXd y_mean_, innovation_;
   Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> index_;
   Eigen::Index observed_count_ = 0;
