@@ -1,0 +1,344 @@
+/// @file
+/// The paper's evaluation (section 5) on an in-memory recording, for the S2KF tracker and the
+/// per-frame gradient baseline: marker distance, runtime and accuracy against ground truth per
+/// method; the occlusion Monte Carlo; the sample-count sweep. No file I/O: the `s2kf evaluate`
+/// command and the tests share it.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/motion_files.hpp>
+#include <s2kf/sim/occlusion.hpp>
+#include <s2kf/sim/random.hpp>
+#include <s2kf/track/gradient_baseline.hpp>
+#include <s2kf/track/height_estimate.hpp>
+#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/tracker.hpp>
+#include <s2kf/track/tracker_options.hpp>
+#include <s2kf/track/tracking_metrics.hpp>
+#include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/truth_metrics.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace s2kf::track {
+
+/// The model and marker mapping both methods use for one recording: the MMM model scaled to the
+/// height estimated from rigid marker pairs (as `s2kf track` does), or to `height_mm` when given.
+struct EvaluationSetup {
+  body::BodyModel model;
+  MarkerMapping mapping;
+  double rate_hz = 0;
+  double height_mm = 0;
+};
+
+/// Throws std::invalid_argument (a sentence) when the recording has no frames, no valid rate or
+/// too few labels that are markers of the model.
+inline EvaluationSetup prepare_evaluation(const c3d::Recording& recording, double height_mm = 0) {
+  if (recording.frame_count() == 0) throw std::invalid_argument("the recording holds no frame");
+  if (!(recording.info.rate > 0)) throw std::invalid_argument("the recording has no valid frame rate");
+  EvaluationSetup setup;
+  setup.rate_hz = recording.info.rate;
+  setup.model = body::mmm_body_model(1000.0);
+  std::vector<std::string> labels;
+  for (const c3d::PointLabel& label : recording.info.labels)
+    labels.push_back(label.model_output ? std::string() : label.name);
+  setup.mapping = map_markers(labels, setup.model.marker_names());
+  if (setup.mapping.markers_used() < TrackerOptions{}.min_markers_to_start)
+    throw std::invalid_argument("only " + std::to_string(setup.mapping.markers_used()) +
+                                " labels of the recording are markers of the body model; at least " +
+                                std::to_string(TrackerOptions{}.min_markers_to_start) + " are needed");
+  setup.height_mm = height_mm;
+  if (!(height_mm > 0)) {
+    HeightEstimator estimator(setup.model, setup.mapping);
+    const Eigen::Index step = std::max<Eigen::Index>(1, recording.frame_count() / 200);
+    for (Eigen::Index f = 0; f < recording.frame_count(); f += step)
+      estimator.add_frame(recording.frame(f), recording.visible.col(f));
+    setup.height_mm = estimator.height_mm().value_or(1750.0);
+  }
+  setup.model = setup.model.scaled(setup.height_mm);
+  return setup;
+}
+
+/// Throws std::invalid_argument (a sentence) unless `truth` fits the recording: the model's joint
+/// columns and one row per frame, numbered 0, 1, ...
+inline void check_truth(const io::MotionTable& truth, const EvaluationSetup& setup, Eigen::Index frames) {
+  if (truth.joint_names != setup.model.joint_names())
+    throw std::invalid_argument("the truth's joint columns are not the body model's " +
+                                std::to_string(setup.model.joint_count()) + " joints (BPx ... RAy) in order");
+  if (truth.frames() != frames)
+    throw std::invalid_argument("the truth has " + std::to_string(truth.frames()) +
+                                " frames, the recording " + std::to_string(frames));
+  for (Eigen::Index r = 0; r < truth.frames(); ++r)
+    if (truth.frame[static_cast<std::size_t>(r)] != r)
+      throw std::invalid_argument("the truth's frame numbers must run 0, 1, 2, ...; row " +
+                                  std::to_string(r + 1) + " holds frame " +
+                                  std::to_string(truth.frame[static_cast<std::size_t>(r)]));
+}
+
+/// The first rows of a motion table (all of them when rows <= 0 or beyond its length).
+inline io::MotionTable first_rows(const io::MotionTable& motion, Eigen::Index rows) {
+  if (rows <= 0 || rows >= motion.frames()) return motion;
+  io::MotionTable head = motion;
+  head.values = motion.values.topRows(rows);
+  head.frame.resize(static_cast<std::size_t>(rows));
+  head.time.resize(static_cast<std::size_t>(rows));
+  return head;
+}
+
+/// The first `frames` frames of a recording (all of them when frames <= 0 or beyond its length).
+inline c3d::Recording first_frames(const c3d::Recording& recording, Eigen::Index frames) {
+  if (frames <= 0 || frames >= recording.frame_count()) return recording;
+  c3d::Recording head = recording;
+  head.positions = recording.positions.leftCols(frames);
+  head.visible = recording.visible.leftCols(frames);
+  head.info.frame_count = frames;
+  return head;
+}
+
+/// The mean distance (mm) between the markers a pose predicts (3 x model markers) and the points
+/// of `reference` (3 x P) that are mapped and visible there: the paper's "average marker distance",
+/// against every recorded marker whether or not the tracker was shown it. NaN when none.
+inline double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eigen::Matrix3Xd& reference,
+                                   const Eigen::Array<bool, Eigen::Dynamic, 1>& reference_visible,
+                                   const MarkerMapping& mapping) {
+  double sum = 0;
+  int count = 0;
+  for (std::size_t m = 0; m < mapping.point_of_marker.size(); ++m) {
+    const int p = mapping.point_of_marker[m];
+    if (p < 0 || p >= reference.cols() || !reference_visible(p) || !reference.col(p).allFinite()) continue;
+    sum += (reference.col(p) - predicted.col(static_cast<Eigen::Index>(m))).norm();
+    ++count;
+  }
+  return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
+}
+
+enum class Method { s2kf, baseline };
+
+inline std::string to_string(Method method) { return method == Method::s2kf ? "s2kf" : "baseline"; }
+
+/// Tracks `input` with one method; `reference` (same frames and points) is what the marker
+/// distance is measured against (the input itself, or the complete recording when the input had
+/// markers hidden). on_frame(index) is called after every frame.
+inline TrackingRun track_recording(const EvaluationSetup& setup, const c3d::Recording& input,
+                                   const c3d::Recording& reference, Method method, int samples,
+                                   std::vector<double>* distance_to_reference = nullptr,
+                                   const std::function<void(long)>& on_frame = {}) {
+  if (reference.frame_count() != input.frame_count() || reference.point_count() != input.point_count())
+    throw std::invalid_argument("the reference recording must have the input's frames and points");
+  Eigen::Index f = 0;
+  auto next_frame = [&](c3d::Frame& frame) {
+    if (f >= input.frame_count()) return false;
+    frame.index = f;
+    frame.positions = input.frame(f);
+    frame.visible = input.visible.col(f);
+    ++f;
+    return true;
+  };
+  auto run_with = [&](auto& tracker) {
+    if (distance_to_reference) distance_to_reference->clear();
+    auto each = [&](long index) {
+      if (distance_to_reference) {
+        const FrameEstimate& e = tracker.estimate();
+        distance_to_reference->push_back(
+            e.tracked ? mean_marker_distance(e.predicted_markers, reference.frame(index),
+                                             reference.visible.col(index), setup.mapping)
+                      : std::numeric_limits<double>::quiet_NaN());
+      }
+      if (on_frame) on_frame(index);
+    };
+    return run_tracking(tracker, next_frame, setup.rate_hz, setup.model.joint_names(), false, each);
+  };
+  if (method == Method::s2kf) {
+    TrackerOptions options;
+    options.samples = samples;
+    Tracker tracker(setup.model, setup.mapping, options, setup.rate_hz);
+    return run_with(tracker);
+  }
+  GradientBaseline baseline(setup.model, setup.mapping);
+  return run_with(baseline);
+}
+
+/// One method on one recording, summarised as spec/evaluation.md asks.
+struct MethodResult {
+  Method method = Method::s2kf;
+  int samples = 0;  ///< S2KF sample count; 0 for the baseline
+  TrackingRun run;
+  long converged_frame = -1;  ///< first frame after which the distance stays within 1.5 x its final level
+  double level_mm = 0;        ///< mean marker distance from converged_frame on
+  double worst_mm = 0;        ///< largest per-frame mean marker distance from converged_frame on
+  long worst_frame = -1;
+  double worst_all_frames_mm = 0;                ///< largest per-frame distance over the whole recording
+  double median_ms = 0, p99_ms = 0, max_ms = 0;  ///< latency per frame
+  std::optional<TruthComparison> truth;          ///< when ground truth was given
+};
+
+inline MethodResult summarise(Method method, int samples, TrackingRun run, const EvaluationSetup& setup,
+                              const io::MotionTable* truth, long warmup) {
+  MethodResult result;
+  result.method = method;
+  result.samples = method == Method::s2kf ? samples : 0;
+  result.converged_frame = converged_frame(run.mean_marker_distance);
+  result.level_mm = mean_from(run.mean_marker_distance, result.converged_frame);
+  const auto& d = run.mean_marker_distance;
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    if (!std::isfinite(d[k])) continue;
+    result.worst_all_frames_mm = std::max(result.worst_all_frames_mm, d[k]);
+    if (static_cast<long>(k) >= result.converged_frame && d[k] > result.worst_mm)
+      result.worst_mm = d[k], result.worst_frame = static_cast<long>(k);
+  }
+  std::vector<double> ms;
+  for (double s : run.seconds) ms.push_back(1000 * s);
+  result.median_ms = quantile(ms, 0.5);
+  result.p99_ms = quantile(ms, 0.99);
+  result.max_ms = quantile(ms, 1.0);
+  if (truth) result.truth = compare_with_truth(setup.model, run.motion, *truth, warmup);
+  result.run = std::move(run);
+  return result;
+}
+
+/// Tracks the recording with one method and summarises it; `truth` (optional) must have a row
+/// per frame of the recording with the model's joint columns.
+inline MethodResult evaluate_method(const EvaluationSetup& setup, const c3d::Recording& recording,
+                                    Method method, int samples, const io::MotionTable* truth, long warmup,
+                                    const std::function<void(long)>& on_frame = {}) {
+  TrackingRun run = track_recording(setup, recording, recording, method, samples, nullptr, on_frame);
+  return summarise(method, samples, std::move(run), setup, truth, warmup);
+}
+
+/// Per-frame minimum, maximum and mean over Monte Carlo runs (NaN values skipped).
+struct Band {
+  std::vector<double> min, max, mean;
+};
+
+inline Band band_over_runs(const std::vector<std::vector<double>>& runs) {
+  Band band;
+  const std::size_t frames = runs.empty() ? 0 : runs.front().size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t k = 0; k < frames; ++k) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0;
+    int count = 0;
+    for (const auto& run : runs)
+      if (k < run.size() && std::isfinite(run[k]))
+        lo = std::min(lo, run[k]), hi = std::max(hi, run[k]), sum += run[k], ++count;
+    band.min.push_back(count ? lo : nan);
+    band.max.push_back(count ? hi : nan);
+    band.mean.push_back(count ? sum / count : nan);
+  }
+  return band;
+}
+
+struct OcclusionOptions {
+  int runs = 100;
+  std::uint64_t seed = 1;  ///< run r uses the generator seeded with sim::derive_seed(seed, r)
+  sim::RandomOcclusion occlusion{sim::kPaperOcclusionProbability, sim::kPaperOcclusionMeanFrames};
+  int samples = TrackerOptions{}.samples;
+  bool baseline = true;  ///< also run the baseline on every occluded recording (it leaves hidden markers out)
+};
+
+/// The paper's occlusion experiment: the random process hides markers of a complete recording,
+/// each method tracks what is left, and the marker distance is measured against all recorded
+/// markers, hidden ones included.
+struct OcclusionStudy {
+  int runs = 0;
+  std::vector<std::vector<int>> hidden;  ///< per run and frame: mapped markers hidden by the process
+  std::vector<std::vector<double>> s2kf_distance, baseline_distance;  ///< per run and frame, mm
+  Band s2kf, baseline;                                                ///< per frame over runs
+  std::vector<double> mean_hidden;                                    ///< per frame, over runs
+  double mean_hidden_overall = 0;                                     ///< over runs and frames
+  int max_hidden = 0;  ///< most markers hidden in any frame of any run
+  int markers = 0;     ///< mapped markers visible in the complete recording (first frame)
+  std::vector<double> s2kf_level, baseline_level;   ///< per run: mean distance after its convergence
+  double s2kf_worst_mm = 0, baseline_worst_mm = 0;  ///< largest per-frame distance after warm-up, any run
+};
+
+/// The recording with the markers a visibility mask hides set to not visible (and NaN).
+inline c3d::Recording hide_points(const c3d::Recording& complete, const sim::Visibility& keep) {
+  c3d::Recording occluded = complete;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (Eigen::Index f = 0; f < complete.frame_count(); ++f)
+    for (Eigen::Index p = 0; p < complete.point_count(); ++p)
+      if (!keep(p, f)) {
+        occluded.visible(p, f) = false;
+        occluded.positions.block<3, 1>(3 * p, f).setConstant(nan);
+      }
+  return occluded;
+}
+
+/// `progress(run)` is called after each run. `warmup` frames are left out of the worst distance.
+inline OcclusionStudy occlusion_monte_carlo(const EvaluationSetup& setup, const c3d::Recording& complete,
+                                            const OcclusionOptions& options, long warmup = 20,
+                                            const std::function<void(int)>& progress = {}) {
+  if (options.runs < 1) throw std::invalid_argument("the occlusion study needs at least one run");
+  sim::validate(options.occlusion);
+  OcclusionStudy study;
+  study.runs = options.runs;
+  for (int p : setup.mapping.point_of_marker)
+    if (p >= 0 && complete.frame_count() > 0 && complete.visible(p, 0)) ++study.markers;
+  double hidden_sum = 0;
+  for (int r = 0; r < options.runs; ++r) {
+    std::mt19937_64 rng(sim::derive_seed(options.seed, static_cast<std::uint64_t>(r)));
+    sim::Visibility keep = sim::Visibility::Constant(complete.point_count(), complete.frame_count(), true);
+    sim::apply_random_occlusion(keep, options.occlusion, rng);
+    const c3d::Recording occluded = hide_points(complete, keep);
+    std::vector<int> hidden;
+    for (Eigen::Index f = 0; f < complete.frame_count(); ++f) {
+      int count = 0;
+      for (int p : setup.mapping.point_of_marker)
+        if (p >= 0 && complete.visible(p, f) && !occluded.visible(p, f)) ++count;
+      hidden.push_back(count);
+      hidden_sum += count;
+      study.max_hidden = std::max(study.max_hidden, count);
+    }
+    study.hidden.push_back(std::move(hidden));
+    auto track = [&](Method method, std::vector<std::vector<double>>& distances, std::vector<double>& levels,
+                     double& worst) {
+      std::vector<double> distance;
+      track_recording(setup, occluded, complete, method, options.samples, &distance);
+      levels.push_back(mean_from(distance, converged_frame(distance)));
+      for (std::size_t k = static_cast<std::size_t>(std::max(0L, warmup)); k < distance.size(); ++k)
+        if (std::isfinite(distance[k])) worst = std::max(worst, distance[k]);
+      distances.push_back(std::move(distance));
+    };
+    track(Method::s2kf, study.s2kf_distance, study.s2kf_level, study.s2kf_worst_mm);
+    if (options.baseline)
+      track(Method::baseline, study.baseline_distance, study.baseline_level, study.baseline_worst_mm);
+    if (progress) progress(r);
+  }
+  study.s2kf = band_over_runs(study.s2kf_distance);
+  study.baseline = band_over_runs(study.baseline_distance);
+  for (Eigen::Index f = 0; f < complete.frame_count(); ++f) {
+    double sum = 0;
+    for (const auto& run : study.hidden) sum += run[static_cast<std::size_t>(f)];
+    study.mean_hidden.push_back(sum / options.runs);
+  }
+  study.mean_hidden_overall =
+      complete.frame_count() ? hidden_sum / (static_cast<double>(options.runs) * complete.frame_count()) : 0;
+  return study;
+}
+
+/// Latency and accuracy of the S2KF for each sample count L on one recording.
+inline std::vector<MethodResult> sample_sweep(const EvaluationSetup& setup, const c3d::Recording& recording,
+                                              const std::vector<int>& sample_counts,
+                                              const io::MotionTable* truth, long warmup,
+                                              const std::function<void(int)>& progress = {}) {
+  std::vector<MethodResult> results;
+  for (int samples : sample_counts) {
+    results.push_back(evaluate_method(setup, recording, Method::s2kf, samples, truth, warmup));
+    if (progress) progress(samples);
+  }
+  return results;
+}
+
+}  // namespace s2kf::track

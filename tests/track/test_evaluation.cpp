@@ -1,0 +1,425 @@
+// The per-frame gradient baseline, the evaluation library (both methods, the occlusion Monte
+// Carlo, the sample sweep) and the `s2kf evaluate` command.
+//
+// Sizes are small on purpose (60 frames, L = 93, 2 runs): the suite also runs under sanitizers.
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/motion_files.hpp>
+#include <s2kf/sim/occlusion.hpp>
+#include <s2kf/sim/recording.hpp>
+#include <s2kf/sim/subject.hpp>
+#include <s2kf/track/evaluation.hpp>
+#include <s2kf/track/gradient_baseline.hpp>
+#include <s2kf/track/tracker.hpp>
+#include <s2kf/track/tracking_metrics.hpp>
+#include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/truth_metrics.hpp>
+
+#include "../../examples/s2kf/motion_json.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace s2kf;
+namespace fs = std::filesystem;
+
+constexpr double kDegrees = 180.0 / 3.14159265358979323846;
+
+std::string data(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct CommandResult {
+  int status;
+  std::string output;
+};
+
+CommandResult run_command(const std::string& arguments) {
+  const std::string command = std::string(S2KF_CLI) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  while (pipe && fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  const int status = pipe ? pclose(pipe) : -1;
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// The number after "key": at its first occurrence after `after` in a JSON text.
+double json_number(const std::string& text, const std::string& key, const std::string& after = "") {
+  const std::size_t start = after.empty() ? 0 : text.find("\"" + after + "\"");
+  const std::size_t at = text.find("\"" + key + "\":", start == std::string::npos ? 0 : start);
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(text.c_str() + at + key.size() + 3, nullptr);
+}
+
+/// A handstand played on a subject exactly like the model (no segment scaling, placement, soft
+/// tissue or noise): the markers are the model's markers at the truth.
+sim::Recording exact_handstand(Eigen::Index frames, double height_mm) {
+  const body::BodyModel reference = body::mmm_body_model(1000);
+  const cli::JointTable joints{reference.joint_names(), reference.lower_limits(), reference.upper_limits()};
+  const sim::KeyframeMotion motion = cli::load_motion_file(data("motions/handstand.json"), joints, 1);
+  sim::SubjectOptions subject_options;
+  subject_options.height_mm = height_mm;
+  subject_options.segment_scale_sd = subject_options.placement_sd_mm = 0;
+  subject_options.soft_tissue_mm = subject_options.noise_sd_mm = 0;
+  const sim::Subject subject = sim::make_subject(reference, subject_options, 7);
+  sim::RecordingOptions options;
+  options.frames = frames;
+  return sim::simulate_recording(motion, subject, options, 7);
+}
+
+io::MotionTable truth_table(const sim::Recording& recording, const body::BodyModel& model) {
+  io::MotionTable truth;
+  truth.joint_names = model.joint_names();
+  truth.values.resize(recording.frames(), 6 + model.joint_count());
+  for (Eigen::Index k = 0; k < recording.frames(); ++k) {
+    const body::Pose& pose = recording.truth[static_cast<std::size_t>(k)];
+    truth.frame.push_back(static_cast<long>(k));
+    truth.time.push_back(recording.time(k));
+    truth.values.row(k) << pose.root_position.transpose(), pose.root_rpy.transpose(), pose.joints.transpose();
+  }
+  return truth;
+}
+
+/// The simulated recording as the C3D reader would hand it over.
+c3d::Recording as_c3d(const sim::Recording& recording) {
+  c3d::Recording c;
+  c.info.rate = recording.frame_rate;
+  for (const std::string& name : recording.marker_names) {
+    c3d::PointLabel label;
+    label.name = label.raw = name;
+    c.info.labels.push_back(label);
+  }
+  c.info.point_count = static_cast<int>(recording.markers());
+  c.info.frame_count = recording.frames();
+  c.positions.resize(3 * recording.markers(), recording.frames());
+  for (Eigen::Index k = 0; k < recording.frames(); ++k)
+    c.positions.col(k) = recording.measured[static_cast<std::size_t>(k)].reshaped();
+  c.visible = recording.visible;
+  return c;
+}
+
+c3d::Recording bundled_handstand(Eigen::Index frames) {
+  return track::first_frames(c3d::read_c3d(data("handstand.c3d")), frames);
+}
+
+TEST(GradientBaseline, ConvergesToTheTruthOnExactFrames) {
+  const sim::Recording recording = exact_handstand(60, 1750);
+  const body::BodyModel model = body::mmm_body_model(1000).scaled(1750);
+  const track::MarkerMapping mapping = track::map_markers(recording.marker_names, model.marker_names());
+  track::GradientBaseline baseline(model, mapping);
+  Eigen::Index f = 0;
+  auto next = [&](c3d::Frame& frame) {
+    if (f >= recording.frames()) return false;
+    frame.index = f;
+    frame.positions = recording.measured[static_cast<std::size_t>(f)];
+    frame.visible = recording.visible.col(f);
+    ++f;
+    return true;
+  };
+  int most_iterations = 0;
+  const track::TrackingRun run =
+      track::run_tracking(baseline, next, recording.frame_rate, model.joint_names(), false, [&](long index) {
+        if (index > 0) most_iterations = std::max(most_iterations, baseline.last_iterations());
+      });
+  for (double d : run.mean_marker_distance) EXPECT_LT(d, 0.05);  // mm, every frame, the first included
+  const track::TruthComparison truth =
+      track::compare_with_truth(model, run.motion, truth_table(recording, model), 0);
+  EXPECT_LT(truth.segment_orientation_rms_deg, 0.05);
+  EXPECT_LT(truth.limb_flexion_rms_deg, 0.1);
+  EXPECT_LT(truth.root_position_rms_mm, 0.05);
+  EXPECT_EQ(truth.joint_limit_violations, 0);
+  // Warm-started from the previous frame, it needs only a few iterations per frame.
+  EXPECT_LE(most_iterations, 15);
+
+  // The evaluation's path (setup from the labels, the given height) gives the same fit.
+  const c3d::Recording c3d_recording = as_c3d(recording);
+  const track::EvaluationSetup setup = track::prepare_evaluation(c3d_recording, 1750);
+  const io::MotionTable truth_motion = truth_table(recording, model);
+  const track::MethodResult evaluated =
+      track::evaluate_method(setup, c3d_recording, track::Method::baseline, 0, &truth_motion, 0);
+  EXPECT_LT(evaluated.worst_all_frames_mm, 0.05);
+  ASSERT_TRUE(evaluated.truth.has_value());
+  EXPECT_LT(evaluated.truth->segment_orientation_rms_deg, 0.05);
+}
+
+/// Fits one set of model markers (three frames, warm-started) and returns the estimate.
+track::FrameEstimate fit_points(const body::BodyModel& model, const Eigen::Matrix3Xd& points) {
+  const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const Eigen::Array<bool, Eigen::Dynamic, 1> visible =
+      Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(points.cols(), true);
+  track::GradientBaseline baseline(model, mapping);
+  for (int frame = 0; frame < 3; ++frame) baseline.process(points, visible);
+  return baseline.estimate();
+}
+
+void expect_within_limits(const body::BodyModel& model, const Eigen::VectorXd& joints) {
+  for (int j = 0; j < model.joint_count(); ++j) {
+    EXPECT_GE(joints(j), model.joints[j].lower) << model.joints[j].name;
+    EXPECT_LE(joints(j), model.joints[j].upper) << model.joints[j].name;
+  }
+}
+
+TEST(GradientBaseline, FindsATruthThatLiesOnJointLimits) {
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const int knee = model.joint_index("LKx"), elbow = model.joint_index("REx");
+  ASSERT_GE(knee, 0);
+  ASSERT_GE(elbow, 0);
+  body::Pose pose;
+  pose.root_position = Eigen::Vector3d(100, -50, 1000);
+  pose.joints(knee) = model.joints[knee].upper;
+  pose.joints(elbow) = model.joints[elbow].lower;
+  const Eigen::Matrix3Xd points = body::marker_positions(model, pose);
+  const track::FrameEstimate estimate = fit_points(model, points);
+  expect_within_limits(model, estimate.pose.joints);
+  EXPECT_NEAR(estimate.pose.joints(knee), model.joints[knee].upper, 1e-4);
+  EXPECT_NEAR(estimate.pose.joints(elbow), model.joints[elbow].lower, 1e-3);
+  EXPECT_LT((estimate.predicted_markers - points).colwise().norm().maxCoeff(), 0.01);  // mm
+}
+
+TEST(GradientBaseline, StaysOnTheLimitWhenTheMarkersAskForMore) {
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const int knee = model.joint_index("LKx");
+  ASSERT_GE(knee, 0);
+  body::Pose pose;
+  pose.root_position = Eigen::Vector3d(100, -50, 1000);
+  pose.joints(knee) = model.joints[knee].upper + 0.15;  // bent past its range
+  const Eigen::Matrix3Xd points = body::marker_positions(model, pose);
+  const track::FrameEstimate estimate = fit_points(model, points);
+  expect_within_limits(model, estimate.pose.joints);
+  EXPECT_NEAR(estimate.pose.joints(knee), model.joints[knee].upper, 1e-9);
+  // The constrained optimum is at least as good as the truth projected onto the limits (a
+  // feasible pose), and the fit is not exact (the markers ask for more than the limit allows).
+  body::Pose projected = pose;
+  projected.joints(knee) = model.joints[knee].upper;
+  const double projected_cost = (body::marker_positions(model, projected) - points).squaredNorm();
+  const double fitted_cost = (estimate.predicted_markers - points).squaredNorm();
+  EXPECT_LE(fitted_cost, projected_cost * (1 + 1e-9));
+  EXPECT_GT(fitted_cost, 1.0);  // mm^2
+}
+
+TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
+  const c3d::Recording recording = bundled_handstand(60);
+  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data("handstand_truth.csv")), 60);
+  track::check_truth(truth, setup, 60);
+  const track::MethodResult s2kf =
+      track::evaluate_method(setup, recording, track::Method::s2kf, 93, &truth, 20);
+  const track::MethodResult baseline =
+      track::evaluate_method(setup, recording, track::Method::baseline, 0, &truth, 20);
+
+  // The same trackers run by hand through run_tracking.
+  Eigen::Index f = 0;
+  auto next = [&](c3d::Frame& frame) {
+    if (f >= recording.frame_count()) return false;
+    frame.index = f;
+    frame.positions = recording.frame(f);
+    frame.visible = recording.visible.col(f);
+    ++f;
+    return true;
+  };
+  track::TrackerOptions options;
+  options.samples = 93;
+  track::Tracker tracker(setup.model, setup.mapping, options, recording.info.rate);
+  const track::TrackingRun by_hand =
+      track::run_tracking(tracker, next, recording.info.rate, setup.model.joint_names());
+  f = 0;
+  track::GradientBaseline gradient(setup.model, setup.mapping);
+  const track::TrackingRun by_hand_baseline =
+      track::run_tracking(gradient, next, recording.info.rate, setup.model.joint_names());
+
+  ASSERT_EQ(s2kf.run.mean_marker_distance.size(), 60u);
+  for (std::size_t k = 0; k < 60; ++k) {
+    EXPECT_DOUBLE_EQ(s2kf.run.mean_marker_distance[k], by_hand.mean_marker_distance[k]) << k;
+    EXPECT_DOUBLE_EQ(baseline.run.mean_marker_distance[k], by_hand_baseline.mean_marker_distance[k]) << k;
+  }
+  const long converged = track::converged_frame(by_hand.mean_marker_distance);
+  EXPECT_EQ(s2kf.converged_frame, converged);
+  EXPECT_DOUBLE_EQ(s2kf.level_mm, track::mean_from(by_hand.mean_marker_distance, converged));
+  const track::TruthComparison direct = track::compare_with_truth(setup.model, by_hand.motion, truth, 20);
+  ASSERT_TRUE(s2kf.truth.has_value());
+  EXPECT_DOUBLE_EQ(s2kf.truth->segment_orientation_rms_deg, direct.segment_orientation_rms_deg);
+  EXPECT_EQ(s2kf.truth->frames, 40);
+  // Both track the synthetic handstand to centimetres; the worst frame is no better than the mean.
+  EXPECT_LT(s2kf.level_mm, 40);
+  EXPECT_LT(baseline.level_mm, 40);
+  EXPECT_GE(s2kf.worst_mm, s2kf.level_mm);
+  EXPECT_GT(s2kf.median_ms, 0);
+  EXPECT_GE(s2kf.p99_ms, s2kf.median_ms);
+}
+
+TEST(Evaluation, OcclusionStudyHidesWhatTheProcessHidesAndMeasuresAgainstAllMarkers) {
+  const c3d::Recording recording = bundled_handstand(60);
+  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  track::OcclusionOptions options;
+  options.runs = 2;
+  options.samples = 93;
+  options.seed = 11;
+  options.occlusion.probability = 0.02;  // more than the paper's, so 60 frames hide something
+  options.occlusion.mean_frames = 20;
+  const track::OcclusionStudy study = track::occlusion_monte_carlo(setup, recording, options, 20);
+  ASSERT_EQ(study.hidden.size(), 2u);
+  EXPECT_EQ(study.markers, 50);
+  double sum = 0;
+  for (int r = 0; r < 2; ++r) {
+    // The same process, run independently with the documented seed.
+    std::mt19937_64 rng(sim::derive_seed(11, static_cast<std::uint64_t>(r)));
+    sim::Visibility keep = sim::Visibility::Constant(recording.point_count(), 60, true);
+    sim::apply_random_occlusion(keep, options.occlusion, rng);
+    for (Eigen::Index k = 0; k < 60; ++k) {
+      EXPECT_EQ(study.hidden[r][static_cast<std::size_t>(k)], static_cast<int>((!keep.col(k)).count())) << k;
+      sum += study.hidden[r][static_cast<std::size_t>(k)];
+    }
+  }
+  EXPECT_GT(sum, 0);
+  EXPECT_NEAR(study.mean_hidden_overall, sum / 120, 1e-12);
+  for (std::size_t k = 0; k < 60; ++k) {
+    EXPECT_NEAR(study.mean_hidden[k], (study.hidden[0][k] + study.hidden[1][k]) / 2.0, 1e-12);
+    EXPECT_LE(study.s2kf.min[k], study.s2kf.mean[k]);
+    EXPECT_LE(study.s2kf.mean[k], study.s2kf.max[k]);
+    EXPECT_DOUBLE_EQ(study.s2kf.min[k], std::min(study.s2kf_distance[0][k], study.s2kf_distance[1][k]));
+  }
+  // Without occlusion every marker is shown, so the distance against all markers is the
+  // tracker's own per-frame distance.
+  options.occlusion.probability = 0;
+  options.runs = 1;
+  const track::OcclusionStudy clear = track::occlusion_monte_carlo(setup, recording, options, 20);
+  const track::MethodResult s2kf =
+      track::evaluate_method(setup, recording, track::Method::s2kf, 93, nullptr, 20);
+  const track::MethodResult baseline =
+      track::evaluate_method(setup, recording, track::Method::baseline, 0, nullptr, 20);
+  for (std::size_t k = 0; k < 60; ++k) {
+    EXPECT_EQ(clear.hidden[0][k], 0);
+    EXPECT_NEAR(clear.s2kf_distance[0][k], s2kf.run.mean_marker_distance[k], 1e-9) << k;
+    EXPECT_NEAR(clear.baseline_distance[0][k], baseline.run.mean_marker_distance[k], 1e-9) << k;
+  }
+}
+
+TEST(Evaluation, DistanceAgainstAllMarkersCountsHiddenOnes) {
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const Eigen::Matrix3Xd predicted = body::marker_positions(model, body::Pose{});
+  Eigen::Matrix3Xd reference = predicted;
+  reference(0, 0) += 50;  // one marker 50 mm off, the rest exact
+  Eigen::Array<bool, Eigen::Dynamic, 1> visible =
+      Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(predicted.cols(), true);
+  EXPECT_NEAR(track::mean_marker_distance(predicted, reference, visible, mapping),
+              50.0 / model.marker_count(), 1e-12);
+  visible(0) = false;  // a marker the reference itself lacks does not count
+  EXPECT_NEAR(track::mean_marker_distance(predicted, reference, visible, mapping), 0.0, 1e-12);
+}
+
+TEST(Evaluation, SampleSweepRunsEachCount) {
+  const c3d::Recording recording = bundled_handstand(20);
+  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  const auto sweep = track::sample_sweep(setup, recording, {93, 101}, nullptr, 5);
+  ASSERT_EQ(sweep.size(), 2u);
+  EXPECT_EQ(sweep[0].samples, 93);
+  EXPECT_EQ(sweep[1].samples, 101);
+  for (const auto& r : sweep) EXPECT_EQ(r.run.mean_marker_distance.size(), 20u);
+  EXPECT_NE(sweep[0].run.mean_marker_distance.back(), sweep[1].run.mean_marker_distance.back());
+}
+
+TEST(Evaluation, TruthThatDoesNotFitIsRejected) {
+  const c3d::Recording recording = bundled_handstand(10);
+  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  io::MotionTable truth = track::first_rows(io::load_motion_csv(data("handstand_truth.csv")), 10);
+  EXPECT_NO_THROW(track::check_truth(truth, setup, 10));
+  EXPECT_THROW(track::check_truth(truth, setup, 11), std::invalid_argument);
+  truth.joint_names[3] = "elbow";
+  EXPECT_THROW(track::check_truth(truth, setup, 10), std::invalid_argument);
+}
+
+TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
+  const fs::path out = scratch("evaluate_short");
+  const CommandResult result =
+      run_command("evaluate --frames 60 --runs 2 --samples 93 --quiet --out " + out.string());
+  ASSERT_EQ(result.status, 0) << result.output;
+  for (const char* name : {"marker_distance.csv", "occlusion_band.csv", "hidden_markers.csv", "runtime.csv",
+                           "joint_error.csv", "samples.csv", "summary.json"})
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  const std::string summary = read_text(out / "summary.json");
+  if (summary.find("\"figure_problems\": []") != std::string::npos)
+    for (const char* name :
+         {"fig3_marker_distance", "fig4_runtime", "fig7_hidden_markers", "joint_error", "samples"}) {
+      EXPECT_GT(fs::file_size(out / (std::string(name) + ".png")), 1000u) << name;
+      EXPECT_GT(fs::file_size(out / (std::string(name) + ".svg")), 1000u) << name;
+    }
+  // 60 frames: a header and 60 rows per series.
+  const std::string distance = read_text(out / "marker_distance.csv");
+  EXPECT_EQ(std::count(distance.begin(), distance.end(), '\n'), 61);
+  EXPECT_EQ(distance.substr(0, distance.find('\n')), "frame,time,s2kf_mm,baseline_mm");
+  const std::string hidden = read_text(out / "hidden_markers.csv");
+  EXPECT_EQ(hidden.substr(0, hidden.find('\n')), "frame,time,run1,run2,mean");
+
+  // The numbers are the library's for the same input.
+  const c3d::Recording recording = bundled_handstand(60);
+  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data("handstand_truth.csv")), 60);
+  const track::MethodResult s2kf =
+      track::evaluate_method(setup, recording, track::Method::s2kf, 93, &truth, 20);
+  const track::MethodResult baseline =
+      track::evaluate_method(setup, recording, track::Method::baseline, 0, &truth, 20);
+  EXPECT_NEAR(json_number(summary, "mean_marker_distance_mm", "s2kf"), s2kf.level_mm, 1e-9 * s2kf.level_mm);
+  EXPECT_NEAR(json_number(summary, "mean_marker_distance_mm", "baseline"), baseline.level_mm,
+              1e-9 * baseline.level_mm);
+  EXPECT_NEAR(json_number(summary, "segment_orientation_rms_deg", "s2kf"),
+              s2kf.truth->segment_orientation_rms_deg, 1e-9);
+  EXPECT_EQ(json_number(summary, "frames"), 60);
+  EXPECT_EQ(json_number(summary, "runs"), 2);
+}
+
+TEST(EvaluateCommand, BadInputGivesASentenceAndExitStatusOne) {
+  const fs::path dir = scratch("evaluate_bad");
+  auto expect_failure = [&](const std::string& arguments, const std::string& phrase) {
+    const CommandResult result =
+        run_command("evaluate " + arguments + " --quiet --out " + (dir / "out").string());
+    EXPECT_EQ(result.status, 1) << arguments << "\n" << result.output;
+    EXPECT_NE(result.output.find("s2kf: "), std::string::npos) << result.output;
+    EXPECT_NE(result.output.find(phrase), std::string::npos) << arguments << "\n" << result.output;
+  };
+  expect_failure((dir / "missing.c3d").string(), "no such file");
+  expect_failure("--samples 93,abc --frames 5", "'abc' is not one");
+  expect_failure("--samples 5 --frames 5", "'5' is not one");
+  expect_failure("--samples 93, --frames 5", "comma-separated");
+  // Truth with other columns, and truth with too few frames.
+  {
+    std::ofstream bad(dir / "columns.csv");
+    bad << "frame,time,root_x,root_y,root_z,root_roll,root_pitch,root_yaw,elbow\n0,0,0,0,0,0,0,0,0\n";
+  }
+  expect_failure(data("handstand.c3d") + " --frames 5 --truth " + (dir / "columns.csv").string(),
+                 "joint columns");
+  {
+    std::ifstream in(data("handstand_truth.csv"));
+    std::ofstream shortened(dir / "short.csv");
+    std::string line;
+    for (int i = 0; i < 11 && std::getline(in, line); ++i) shortened << line << "\n";
+  }
+  expect_failure(data("handstand.c3d") + " --frames 5 --truth " + (dir / "short.csv").string(),
+                 "has 10 frames");
+}
+
+}  // namespace
