@@ -1,0 +1,214 @@
+/// @file
+/// Marker sets as data: which recording label rides on which model frame, where (offset in that
+/// frame, or "like" a marker of the base model), how much to trust it; applying a set to a body
+/// model, with the errors and observability warnings a user needs. See docs/real-data.md.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/pose.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace s2kf::body {
+
+/// One physical marker of a lab's set.
+struct MarkerSetEntry {
+  std::string label;                 ///< the recording label (without subject prefix), e.g. "LFWT"
+  std::vector<std::string> aliases;  ///< other labels labs use for the same marker, e.g. "LFRA" for "LFRM"
+  /// Frame it rides on: "root", a group ("LS" = after the group's last DoF) or a joint ("LEx").
+  /// Empty with `like`: the frame of the named base-model marker.
+  std::string frame;
+  /// When set: start from the position of this marker of the base model (e.g. "LASI"), expressed
+  /// in `frame` at the zero pose, and add `offset`.
+  std::optional<std::string> like;
+  /// mm at the set's reference height, in `frame` (added to the `like` position when given).
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  std::optional<double>
+      noise_mm;         ///< per-coordinate SD against the model, when it differs from the tracker's
+  double weight = 1.0;  ///< relative weight in the subject calibration's least squares
+};
+
+/// A lab's marker set, or a calibrated subject (then `height_mm` and `segment_scale` are filled).
+struct MarkerSet {
+  std::string name;
+  std::string description;
+  double reference_height_mm = 1000.0;  ///< the height the offsets are given for
+  std::optional<double> height_mm;      ///< a calibrated subject's body height
+  /// Per segment ("root" or a joint group): factor on the lengths of the bones leaving it (the
+  /// translations of the child joints), on top of the height scaling.
+  std::map<std::string, double> segment_scale;
+  std::vector<MarkerSetEntry> entries;
+
+  std::vector<std::string> labels() const {
+    std::vector<std::string> result;
+    for (const MarkerSetEntry& entry : entries) result.push_back(entry.label);
+    return result;
+  }
+};
+
+/// The segment a frame belongs to: "root" for frame 0, else its joint's group.
+inline std::string segment_of_frame(const BodyModel& model, int frame) {
+  return frame == 0 ? std::string("root") : model.joints.at(static_cast<std::size_t>(frame - 1)).group;
+}
+
+/// The name a marker-set file uses for a frame: the group name when the frame ends its group
+/// (what `frame_index(group)` finds), else the joint name ("LEx").
+inline std::string marker_set_frame_name(const BodyModel& model, int frame) {
+  if (frame == 0) return "root";
+  const std::string& group = model.joints.at(static_cast<std::size_t>(frame - 1)).group;
+  return model.frame_index(group) == frame ? group : model.frame_name(frame);
+}
+
+namespace detail {
+inline std::string upper_case(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return text;
+}
+}  // namespace detail
+
+/// Throws std::invalid_argument for a set that cannot be applied to `base`: no entries, an empty
+/// label, a label (or alias) used twice (case-insensitive), an unknown frame, segment or `like`
+/// marker, a non-finite offset, a noise that is not positive, a negative weight.
+inline void validate_marker_set(const BodyModel& base, const MarkerSet& set) {
+  const std::string where = "marker set" + (set.name.empty() ? std::string() : " '" + set.name + "'");
+  if (set.entries.empty()) throw std::invalid_argument(where + " has no markers");
+  if (!(set.reference_height_mm > 0) || !std::isfinite(set.reference_height_mm))
+    throw std::invalid_argument(where + ": reference_height_mm must be a positive number");
+  if (set.height_mm && (!(*set.height_mm > 0) || !std::isfinite(*set.height_mm)))
+    throw std::invalid_argument(where + ": height_mm must be a positive number");
+  std::map<std::string, std::string> seen;  // upper-case label -> the entry that uses it
+  for (const MarkerSetEntry& entry : set.entries) {
+    if (entry.label.empty()) throw std::invalid_argument(where + ": a marker has an empty label");
+    std::vector<std::string> names{entry.label};
+    names.insert(names.end(), entry.aliases.begin(), entry.aliases.end());
+    for (const std::string& name : names) {
+      const auto [it, inserted] = seen.emplace(detail::upper_case(name), entry.label);
+      if (!inserted)
+        throw std::invalid_argument(where + ": the label " + name + " is mapped twice (markers " +
+                                    it->second + " and " + entry.label + ")");
+    }
+    if (entry.frame.empty() && !entry.like)
+      throw std::invalid_argument(where + ": marker " + entry.label + " needs a frame or a \"like\" marker");
+    if (!entry.frame.empty() && base.frame_index(entry.frame) < 0)
+      throw std::invalid_argument(where + ": marker " + entry.label + " rides on the unknown frame '" +
+                                  entry.frame +
+                                  "' (use root, a joint group such as LS, or a joint such as LEx)");
+    if (entry.like && base.marker_index(*entry.like) < 0)
+      throw std::invalid_argument(where + ": marker " + entry.label + " is \"like\" " + *entry.like +
+                                  ", which is not a marker of the base model");
+    if (!entry.offset.allFinite())
+      throw std::invalid_argument(where + ": marker " + entry.label + " has a non-finite offset");
+    if (entry.noise_mm && (!(*entry.noise_mm > 0) || !std::isfinite(*entry.noise_mm)))
+      throw std::invalid_argument(where + ": marker " + entry.label +
+                                  " has a noise that is not a positive number");
+    if (!(entry.weight >= 0) || !std::isfinite(entry.weight))
+      throw std::invalid_argument(where + ": marker " + entry.label + " has a negative or non-finite weight");
+  }
+  for (const auto& [segment, factor] : set.segment_scale) {
+    bool known = segment == "root";
+    for (const Joint& joint : base.joints) known = known || joint.group == segment;
+    if (!known)
+      throw std::invalid_argument(where + ": segment_scale names the unknown segment '" + segment + "'");
+    if (!(factor > 0.5 && factor < 2.0))
+      throw std::invalid_argument(where + ": the scale of segment " + segment +
+                                  " must lie between 0.5 and 2");
+  }
+}
+
+/// The base model with its markers replaced by the set's, in the set's order. The set's offsets
+/// are scaled by base.height_mm / reference_height_mm; `like` positions are read from the base
+/// model's own markers (so `base` must carry them, e.g. mmm_body_model(height)). Segment scales
+/// multiply the translations of the joints leaving each segment.
+inline BodyModel apply_marker_set(const BodyModel& base, const MarkerSet& set) {
+  base.validate();
+  validate_marker_set(base, set);
+  const double factor = base.height_mm / set.reference_height_mm;
+  const FrameTransforms zero = joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(),
+                                            Eigen::VectorXd::Zero(base.joint_count()));
+  BodyModel model = base;
+  model.markers.clear();
+  for (const MarkerSetEntry& entry : set.entries) {
+    Marker marker;
+    marker.name = entry.label;
+    Eigen::Vector3d offset = entry.offset * factor;
+    if (entry.like) {
+      const Marker& reference = base.markers[static_cast<std::size_t>(base.marker_index(*entry.like))];
+      marker.frame = entry.frame.empty() ? reference.frame : base.frame_index(entry.frame);
+      const Eigen::Vector3d world =
+          zero.origins[static_cast<std::size_t>(reference.frame)] +
+          zero.rotations[static_cast<std::size_t>(reference.frame)] * reference.offset;
+      offset += zero.rotations[static_cast<std::size_t>(marker.frame)].transpose() *
+                (world - zero.origins[static_cast<std::size_t>(marker.frame)]);
+    } else {
+      marker.frame = base.frame_index(entry.frame);
+    }
+    marker.offset = offset;
+    model.markers.push_back(marker);
+  }
+  for (Joint& joint : model.joints) {
+    const auto found = set.segment_scale.find(segment_of_frame(base, joint.parent_frame));
+    if (found != set.segment_scale.end()) joint.translation *= found->second;
+  }
+  model.validate();
+  return model;
+}
+
+/// What a user should know before tracking with `model` (a base model after apply_marker_set):
+/// segments the base model observed that the set leaves with no marker, and segments with a single
+/// marker, whose rotation about the line from the joint to that marker no marker constrains.
+inline std::vector<std::string> marker_set_warnings(const BodyModel& base, const BodyModel& model) {
+  std::map<std::string, int> base_count, count;
+  for (const Marker& marker : base.markers) ++base_count[segment_of_frame(base, marker.frame)];
+  for (const Marker& marker : model.markers) ++count[segment_of_frame(model, marker.frame)];
+  std::vector<std::string> warnings;
+  std::vector<std::string> segments{"root"};
+  for (const Joint& joint : model.joints)
+    if (std::find(segments.begin(), segments.end(), joint.group) == segments.end())
+      segments.push_back(joint.group);
+  for (const std::string& segment : segments) {
+    const int n = count.count(segment) ? count[segment] : 0;
+    if (n == 0 && base_count.count(segment))
+      warnings.push_back(segment +
+                         " has no marker: its joints follow only their neighbours and the motion prior");
+    else if (n == 1)
+      warnings.push_back(segment +
+                         " has 1 marker: its rotation is not observable about the line from its joint "
+                         "centre to that marker");
+  }
+  return warnings;
+}
+
+/// How well a recording's labels fit a set: the fraction of the set's markers whose label or an
+/// alias is among the labels (subject prefixes "Subject:" removed, blanks trimmed, case ignored).
+inline double marker_set_match(const std::vector<std::string>& recording_labels, const MarkerSet& set) {
+  if (set.entries.empty()) return 0.0;
+  std::vector<std::string> present;
+  for (const std::string& label : recording_labels) {
+    const auto colon = label.rfind(':');
+    std::string name = colon == std::string::npos ? label : label.substr(colon + 1);
+    name.erase(0, name.find_first_not_of(" \t\r\n"));
+    name.erase(name.find_last_not_of(" \t\r\n") + 1);
+    present.push_back(detail::upper_case(name));
+  }
+  int matched = 0;
+  for (const MarkerSetEntry& entry : set.entries) {
+    bool found = std::find(present.begin(), present.end(), detail::upper_case(entry.label)) != present.end();
+    for (const std::string& alias : entry.aliases)
+      found = found || std::find(present.begin(), present.end(), detail::upper_case(alias)) != present.end();
+    matched += found;
+  }
+  return static_cast<double>(matched) / static_cast<double>(set.entries.size());
+}
+
+}  // namespace s2kf::body

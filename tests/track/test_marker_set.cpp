@@ -1,0 +1,186 @@
+// Marker sets as data: parsing and validation, applying a set to the model, choosing the set that
+// fits a recording, and the subject file `s2kf calibrate` writes.
+#include "../../examples/s2kf/marker_set_json.hpp"
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_set.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/track/marker_set_mapping.hpp>
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace {
+
+using namespace s2kf;
+namespace fs = std::filesystem;
+
+body::MarkerSet bundled(const std::string& name) {
+  return cli::load_marker_set(fs::path(S2KF_DATA_DIR) / "markersets" / (name + ".json"));
+}
+
+std::vector<std::string> labels_of(const std::string& file) {
+  c3d::C3dReader reader(std::string(S2KF_C3D_DATA_DIR) + "/" + file);
+  std::vector<std::string> labels;
+  for (const auto& label : reader.info().labels)
+    labels.push_back(label.model_output ? std::string() : label.raw);
+  return labels;
+}
+
+std::string parse_error(const std::string& text) {
+  try {
+    const body::MarkerSet set = cli::marker_set_from_json(nlohmann::json::parse(text), "test.json");
+    body::apply_marker_set(body::mmm_body_model(1000), set);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MarkerSet, ParsingAndValidationNameTheProblem) {
+  EXPECT_NE(parse_error(R"({"markers": [{"label": "A", "frame": "XX", "offset": [0, 0, 0]}]})")
+                .find("unknown frame 'XX'"),
+            std::string::npos);
+  EXPECT_NE(parse_error(R"({"markers": [{"label": "A", "like": "C7"}, {"label": "a", "like": "T10"}]})")
+                .find("mapped twice"),
+            std::string::npos);
+  EXPECT_NE(
+      parse_error(R"({"markers": [{"label": "A", "like": "NOPE"}]})").find("not a marker of the base model"),
+      std::string::npos);
+  EXPECT_NE(
+      parse_error(R"({"markers": [{"label": "A", "frame": "LS", "offset": [0, 0]}]})").find("array of 3"),
+      std::string::npos);
+  EXPECT_NE(parse_error(R"({"markers": [{"label": "A", "frame": "LS"}]})").find("needs an \"offset\""),
+            std::string::npos);
+  EXPECT_NE(parse_error(R"({"markers": [{"label": "A", "frame": "LS", "offset": [0,0,0], "colour": 1}]})")
+                .find("unknown key"),
+            std::string::npos);
+  EXPECT_NE(parse_error(R"({"markers": []})").find("has no markers"), std::string::npos);
+  EXPECT_NE(parse_error(R"({"segment_scale": {"XX": 1.0}, "markers": [{"label": "A", "like": "C7"}]})")
+                .find("unknown segment"),
+            std::string::npos);
+  EXPECT_EQ(parse_error(R"({"markers": [{"label": "A", "like": "C7", "noise_mm": 5, "weight": 2}]})"), "");
+}
+
+TEST(MarkerSet, AppliedSetPutsMarkersWhereTheSetSays) {
+  // An explicit offset in the LE frame at 1000 mm, applied to a 1800 mm model: FK must put the
+  // marker at origin(LE) + R(LE) * offset * 1.8 in any pose.
+  body::MarkerSet set;
+  set.entries.push_back({"ELB", {}, "LE", std::nullopt, Eigen::Vector3d(10, -20, 30), std::nullopt, 1.0});
+  set.entries.push_back({"ASIS", {}, "", std::string("LASI"), Eigen::Vector3d(0, 0, 5), std::nullopt, 1.0});
+  const body::BodyModel base = body::mmm_body_model(1800);
+  const body::BodyModel model = body::apply_marker_set(base, set);
+  ASSERT_EQ(model.marker_count(), 2);
+  body::Pose pose;
+  pose.root_position = Eigen::Vector3d(100, 200, 900);
+  pose.root_rpy = Eigen::Vector3d(0.1, -0.2, 0.7);
+  for (int j = 0; j < base.joint_count(); ++j)
+    pose.joints(j) = 0.5 * (base.joints[j].lower + base.joints[j].upper);
+  const body::FrameTransforms frames = body::joint_frames(base, pose);
+  const Eigen::Matrix3Xd markers = body::marker_positions(model, pose);
+  const int le = base.frame_index("LE");
+  const Eigen::Vector3d expected = frames.origins[le] + frames.rotations[le] * Eigen::Vector3d(18, -36, 54);
+  EXPECT_LT((markers.col(0) - expected).norm(), 1e-9);
+  // "like LASI" + 5 mm up the pelvis at 1000 mm = LASI of the base model + 9 mm along the root's z.
+  const Eigen::Matrix3Xd base_markers = body::marker_positions(base, pose);
+  const Eigen::Vector3d lasi = base_markers.col(base.marker_index("LASI"));
+  EXPECT_LT((markers.col(1) - (lasi + frames.rotations[0] * Eigen::Vector3d(0, 0, 9))).norm(), 1e-9);
+}
+
+TEST(MarkerSet, KitSetReproducesTheModel) {
+  const body::BodyModel base = body::mmm_body_model(1750);
+  const body::BodyModel model = body::apply_marker_set(base, bundled("kit"));
+  ASSERT_EQ(model.marker_count(), base.marker_count());
+  for (int m = 0; m < model.marker_count(); ++m) {
+    EXPECT_EQ(model.markers[m].name, base.markers[m].name);
+    EXPECT_EQ(model.markers[m].frame, base.markers[m].frame);
+    EXPECT_LT((model.markers[m].offset - base.markers[m].offset).norm(), 1e-6) << base.markers[m].name;
+  }
+  // The KIT set leaves no observed segment empty; only the shanks carry one marker (LTIP, RTIP).
+  const std::vector<std::string> warnings = body::marker_set_warnings(base, model);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0].rfind("LK has 1 marker", 0), 0u);
+  EXPECT_EQ(warnings[1].rfind("RK has 1 marker", 0), 0u);
+}
+
+TEST(MarkerSet, WarnsAboutSegmentsWithOneMarker) {
+  const body::BodyModel base = body::mmm_body_model(1000);
+  const std::vector<std::string> warnings =
+      body::marker_set_warnings(base, body::apply_marker_set(base, bundled("cmu")));
+  bool lw = false;
+  for (const auto& w : warnings) lw = lw || w.rfind("LW has 1 marker", 0) == 0;
+  EXPECT_TRUE(lw);
+}
+
+TEST(MarkerSet, AutomaticChoiceFitsTheLab) {
+  const std::vector<body::MarkerSet> sets{bundled("kit"), bundled("cmu"), bundled("plugin_gait")};
+  EXPECT_EQ(track::choose_marker_set(labels_of("85_02.c3d"), sets), 1);
+  EXPECT_EQ(track::choose_marker_set(labels_of("HDM_mm_01-02_03_120.c3d"), sets), 1);
+  EXPECT_EQ(track::choose_marker_set(labels_of("PiG_Motion-FlatFoot-One.c3d"), sets), 2);
+  EXPECT_EQ(track::choose_marker_set(labels_of("test1.c3d"), sets), 2);
+  EXPECT_EQ(track::choose_marker_set(sets[0].labels(), sets), 0);
+  EXPECT_EQ(track::choose_marker_set({"foo", "bar"}, sets), -1);
+  EXPECT_DOUBLE_EQ(body::marker_set_match(labels_of("85_02.c3d"), sets[1]), 1.0);
+  // test1 labels the forearm LFRA: the alias maps it to LFRM.
+  const track::MarkerMapping mapping = track::map_marker_set(labels_of("test1.c3d"), sets[2]);
+  const std::vector<std::string> pig_labels = sets[2].labels();
+  const auto lfrm = std::find(pig_labels.begin(), pig_labels.end(), "LFRM") - pig_labels.begin();
+  ASSERT_GE(mapping.point_of_marker[static_cast<std::size_t>(lfrm)], 0);
+  EXPECT_EQ(
+      labels_of(
+          "test1.c3d")[static_cast<std::size_t>(mapping.point_of_marker[static_cast<std::size_t>(lfrm)])],
+      "LFRA");
+}
+
+TEST(MarkerSet, JsonRoundTrip) {
+  const body::MarkerSet set = bundled("plugin_gait");
+  const body::MarkerSet again = cli::marker_set_from_json(cli::marker_set_to_json(set), "again");
+  const body::BodyModel base = body::mmm_body_model(1000);
+  const body::BodyModel a = body::apply_marker_set(base, set), b = body::apply_marker_set(base, again);
+  for (int m = 0; m < a.marker_count(); ++m) EXPECT_EQ(a.markers[m].offset, b.markers[m].offset);
+}
+
+std::pair<int, std::string> run_cli(const std::string& arguments) {
+  const std::string command = std::string(S2KF_CLI) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  while (pipe && fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  const int status = pipe ? pclose(pipe) : -1;
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+TEST(MarkerSet, CalibrateWritesASubjectFileThatLoads) {
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "marker_set";
+  fs::create_directories(dir);
+  const std::string recording = std::string(S2KF_C3D_DATA_DIR) + "/85_02.c3d";
+  const std::string subject = (dir / "subject.json").string();
+  const auto [status, output] =
+      run_cli("calibrate " + recording + " --frames 150 --iterations 1 --out " + subject);
+  ASSERT_EQ(status, 0) << output;
+  EXPECT_NE(output.find("marker set cmu"), std::string::npos) << output;
+  const body::MarkerSet set = cli::load_marker_set(subject);
+  ASSERT_TRUE(set.height_mm.has_value());
+  EXPECT_EQ(set.entries.size(), 41u);
+  const body::BodyModel model =
+      body::apply_marker_set(body::mmm_body_model(1000), set).scaled(*set.height_mm);
+  EXPECT_EQ(model.marker_count(), 41);
+  // And the CLI takes it back as --markerset.
+  const auto [again, again_output] =
+      run_cli("calibrate " + recording + " --frames 150 --iterations 1 --markerset " + subject + " --out " +
+              (dir / "again.json").string());
+  EXPECT_EQ(again, 0) << again_output;
+  EXPECT_NE(again_output.find("from the marker-set file"), std::string::npos) << again_output;
+  const auto [bad, bad_output] = run_cli("calibrate " + recording + " --markerset nope --out x.json");
+  EXPECT_EQ(bad, 1);
+  EXPECT_NE(bad_output.find("unknown marker set 'nope'"), std::string::npos) << bad_output;
+}
+
+}  // namespace
