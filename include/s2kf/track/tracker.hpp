@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -28,9 +29,9 @@ namespace s2kf::track {
 struct FrameEstimate {
   bool tracked = false;  ///< false before the first frame with enough markers
   FilterStatus status = FilterStatus::nothing_observed;
-  body::Pose pose;                  ///< root position (mm), roll/pitch/yaw (rad), joint angles (rad)
+  body::Pose pose;  ///< root position (mm), roll/pitch/yaw (rad), joint angles (rad)
   Eigen::Matrix3d root_rotation = Eigen::Matrix3d::Identity();
-  Eigen::MatrixXd covariance;       ///< 46 x 46: position, orientation error (rad), Theta
+  Eigen::MatrixXd covariance;          ///< 46 x 46: position, orientation error (rad), Theta
   Eigen::Matrix3Xd predicted_markers;  ///< every model marker at the estimated pose (mm)
   Eigen::VectorXd marker_distance;     ///< per model marker, mm; NaN where not observed
   double mean_marker_distance = std::numeric_limits<double>::quiet_NaN();
@@ -54,20 +55,23 @@ class Tracker {
         options_(std::move(options)),
         rate_hz_(rate_hz),
         filter_(lcd_sample_set(state_dimension(), options_.samples).set),
-        measurement_model_(model_, body::OrientationParameterization::local_rotation_error) {
+        measurement_model_(model_, body::OrientationParameterization::local_rotation_error),
+        mean_markers_model_(model_, body::OrientationParameterization::local_rotation_error) {
     options_.validate();
     if (!(rate_hz > 0)) throw std::invalid_argument("the frame rate must be positive");
     if (mapping_.point_of_marker.size() != static_cast<std::size_t>(model_.marker_count()))
       throw std::invalid_argument("the marker mapping does not fit the body model");
     for (int m = 0; m < model_.marker_count(); ++m)
       if (mapping_.point_of_marker[m] >= 0) used_markers_.push_back(m);
-    if (used_markers_.empty()) throw std::invalid_argument("no recording label matches a marker of the model");
+    if (used_markers_.empty())
+      throw std::invalid_argument("no recording label matches a marker of the model");
     measurement_model_.select_markers(used_markers_);
     const int n = state_dimension();
     const double dt = 1.0 / rate_hz_;
     process_noise_ = Eigen::MatrixXd::Zero(n, n);
     process_noise_.diagonal().segment<3>(0).setConstant(std::pow(options_.position_speed_mm_per_s * dt, 2));
-    process_noise_.diagonal().segment<3>(3).setConstant(std::pow(options_.orientation_speed_rad_per_s * dt, 2));
+    process_noise_.diagonal().segment<3>(3).setConstant(
+        std::pow(options_.orientation_speed_rad_per_s * dt, 2));
     process_noise_.diagonal().tail(joint_count()).setConstant(std::pow(options_.joint_speed_per_s * dt, 2));
     const Eigen::Index m = 3 * static_cast<Eigen::Index>(used_markers_.size());
     noise_ = Eigen::MatrixXd::Identity(m, m) * options_.marker_noise_mm * options_.marker_noise_mm;
@@ -85,10 +89,17 @@ class Tracker {
   const FrameEstimate& estimate() const { return estimate_; }
   const std::vector<int>& used_markers() const { return used_markers_; }
   int frames_processed() const { return frames_; }
+  /// The filter's posterior after the last frame: [root position (mm), orientation error about
+  /// reference_rotation() (rad, zero after an update), Theta (40)]; what offline smoothing keeps.
+  const GaussianXd& state() const { return state_; }
+  const Eigen::Matrix3d& reference_rotation() const { return reference_rotation_; }
+  /// Q of the random-walk prediction between two frames.
+  const Eigen::MatrixXd& process_noise() const { return process_noise_; }
 
   /// One frame: the recording's points (3 x P, mm, in recording order) and which are visible.
   /// Non-finite coordinates count as not visible.
-  const FrameEstimate& process(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
+  const FrameEstimate& process(const Eigen::Matrix3Xd& points,
+                               const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
     const auto start = std::chrono::steady_clock::now();
     if (points.cols() != visible.size())
       throw std::invalid_argument("process: one visibility flag per recording point is needed");
@@ -118,13 +129,15 @@ class Tracker {
     UpdateOptions update_options;
     update_options.gate_probability = options_.gate_probability;
     if (frames_since_start_ <= options_.converging_frames)
-      update_options.iterations = frames_since_start_ == 0 ? options_.initial_iterations : options_.converging_iterations;
+      update_options.iterations =
+          frames_since_start_ == 0 ? options_.initial_iterations : options_.converging_iterations;
     ++frames_since_start_;
     estimate_.status = FilterStatus::nothing_observed;
     estimate_.nis = std::numeric_limits<double>::quiet_NaN();
     if (count > 0) {
       measurement_model_.set_reference_orientation(reference_rotation_);
-      const UpdateResult result = filter_.update(state_, measurement_model_, measurement_, noise_, observed_, update_options);
+      const UpdateResult result =
+          filter_.update(state_, measurement_model_, measurement_, noise_, observed_, update_options);
       estimate_.status = result.status;
       estimate_.nis = result.nis;
       if (result.ok()) recentre();
@@ -163,7 +176,8 @@ class Tracker {
     if (!options_.rigid_initialisation) {
       // The paper: C_r is the sample covariance of the first frame's markers.
       const Eigen::Matrix3Xd centred = measured.colwise() - centroid;
-      state_.covariance.topLeftCorner<3, 3>() = centred * centred.transpose() / std::max<Eigen::Index>(1, k - 1);
+      state_.covariance.topLeftCorner<3, 3>() =
+          centred * centred.transpose() / std::max<Eigen::Index>(1, k - 1);
     }
     state_.covariance.diagonal().segment<3>(3).setConstant(std::pow(options_.initial_orientation_sd_rad, 2));
     // Joints: the paper starts every joint at mid-range (Theta = 0); the default starts at the
@@ -173,7 +187,8 @@ class Tracker {
       for (int j = 0; j < joint_count(); ++j) {
         const double lower = model_.joints[j].lower, upper = model_.joints[j].upper;
         if (upper <= lower) continue;
-        const double normalised = std::clamp((0.0 - 0.5 * (upper + lower)) / (0.5 * (upper - lower)), -0.8, 0.8);
+        const double normalised =
+            std::clamp((0.0 - 0.5 * (upper + lower)) / (0.5 * (upper - lower)), -0.8, 0.8);
         state_.mean(kRootDofs + j) = std::asin(normalised);
       }
     }
@@ -207,14 +222,21 @@ class Tracker {
     if (estimate_.tracked) {
       estimate_.root_rotation = reference_rotation_;
       measurement_model_.set_reference_orientation(reference_rotation_);
-      estimate_.pose = measurement_model_.pose(state_.mean);
-      estimate_.covariance = state_.covariance;
-      estimate_.predicted_markers = body::marker_positions(model_, estimate_.pose);
+      write_pose(estimate_.pose);
+      estimate_.covariance = state_.covariance;  // same size every frame: no allocation
+      // Every model marker at the mean, through the batched model (allocation-free after its
+      // first call); it equals marker_positions(model_, pose) to rounding.
+      const Eigen::Index markers = model_.marker_count();
+      if (estimate_.predicted_markers.cols() != markers) estimate_.predicted_markers.resize(3, markers);
+      mean_markers_model_.set_reference_orientation(reference_rotation_);
+      mean_markers_model_(state_.mean,
+                          Eigen::Map<Eigen::MatrixXd>(estimate_.predicted_markers.data(), 3 * markers, 1));
       double sum = 0;
       int count = 0;
       for (int m = 0; m < model_.marker_count(); ++m) {
         const int point = mapping_.point_of_marker[m];
-        if (point < 0 || point >= points.cols() || !visible(point) || !points.col(point).allFinite()) continue;
+        if (point < 0 || point >= points.cols() || !visible(point) || !points.col(point).allFinite())
+          continue;
         const double d = (points.col(point) - estimate_.predicted_markers.col(m)).norm();
         estimate_.marker_distance(m) = d;
         sum += d;
@@ -225,6 +247,21 @@ class Tracker {
     estimate_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
+  /// measurement_model_.pose(state_.mean) written in place (that one returns its joint angles in
+  /// a new vector): the same formulas, BoundedJoints::angles for the joints.
+  void write_pose(body::Pose& pose) const {
+    pose.root_position = state_.mean.head<3>();
+    pose.root_rpy = body::rpy_from_rotation(measurement_model_.root_rotation(state_.mean.segment<3>(3)));
+    const body::BoundedJoints& joints = measurement_model_.bounded_joints();
+    for (int j = 0; j < joint_count(); ++j) {
+      const double lower = joints.lower(j), upper = joints.upper(j), half = 0.5 * (upper - lower);
+      pose.joints(j) =
+          half == 0
+              ? lower
+              : std::clamp(half * std::sin(state_.mean(kRootDofs + j)) + 0.5 * (upper + lower), lower, upper);
+    }
+  }
+
   static constexpr double kPi = 3.14159265358979323846;
 
   body::BodyModel model_;
@@ -233,6 +270,7 @@ class Tracker {
   double rate_hz_;
   SmartSamplingKalmanFilter<Eigen::Dynamic> filter_;
   body::MarkerMeasurementModel measurement_model_;
+  body::MarkerMeasurementModel mean_markers_model_;  ///< every model marker, for the reported pose
   std::vector<int> used_markers_;
   GaussianXd state_;
   Eigen::Matrix3d reference_rotation_ = Eigen::Matrix3d::Identity();
