@@ -1,4 +1,5 @@
 // The S2KF against the closed-form Kalman filter, its failure reports, and the iterated update.
+#include <s2kf/core/lcd_sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 
 #include <gtest/gtest.h>
@@ -64,7 +65,10 @@ struct LinearModel {
 };
 
 std::vector<SampleSet> sample_sets_of_dimension(int n) {
-  return {s2kf::ukf_sample_set(n), s2kf::ukf_sample_set(n, 2.0), s2kf::random_sample_set(n, 7 * n, 3)};
+  // The optimal LCD sets (odd count: with the origin; even: without) are the filter's default;
+  // computed here, not taken from the disk cache.
+  return {s2kf::ukf_sample_set(n), s2kf::ukf_sample_set(n, 2.0), s2kf::random_sample_set(n, 7 * n, 3),
+          s2kf::compute_lcd_sample_set(n, 10 * n + 1).set, s2kf::compute_lcd_sample_set(n, 6 * n).set};
 }
 
 TEST(SampleSets, UkfAndRandomSetsHaveExactMoments) {
