@@ -2,6 +2,7 @@
 // .mot, BVH, a JSON summary and a per-frame marker report.
 #include "calibration_hook.hpp"
 #include "command.hpp"
+#include "frame_figure.hpp"
 #include "marker_set_json.hpp"
 
 #include <s2kf/body/body_model.hpp>
@@ -14,6 +15,7 @@
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
+#include <s2kf/track/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -46,6 +48,7 @@ struct TrackSettings {
   bool calibrate = true;  // calibrate the subject on the recording first (not with --subject)
   int calibration_frames = 1200;
   bool smooth = false;
+  long figure_frame = -1;  // >= 0: draw this frame
   bool realtime = false;
   bool quiet = false;
   int jobs = 0;
@@ -113,6 +116,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
         format(static_cast<double>(info.frame_count) * track::TrackingSmoother::kBytesPerFrame / 1e9, 1) +
         " GB); track without --smooth, or split the recording");
 
+  if (settings.figure_frame >= info.frame_count)
+    throw UserError(input + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
+                    std::to_string(info.frame_count) + " frames (0-based)");
   std::vector<std::string> warnings = info.warnings;
   warnings.insert(warnings.end(), choice.warnings.begin(), choice.warnings.end());
   double height = settings.height_mm;
@@ -172,6 +178,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   const double frame_period = 1.0 / info.rate;
   long deadline_misses = 0;
   std::string bad_coordinates;
+  c3d::Frame figure_points;  // the frame --figure draws, as recorded
   auto next_frame = [&](c3d::Frame& frame) {
     if (!bad_coordinates.empty() || !reader->read_frame(frame)) return false;
     for (Eigen::Index p = 0; p < frame.positions.cols(); ++p)
@@ -183,6 +190,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
         bad_coordinates = s.str();
         return false;
       }
+    if (frame.index == settings.figure_frame) figure_points = frame;
     if (settings.realtime) {
       const auto due = start + std::chrono::duration<double>(static_cast<double>(frame.index) * frame_period);
       std::this_thread::sleep_until(due);
@@ -216,6 +224,22 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                     " visible markers needed to start tracking");
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
   if (smoother) smoother->smooth(run.motion);
+  std::string figure_file;
+  if (settings.figure_frame >= 0) {
+    std::string problem;
+    Eigen::Index row = -1;
+    for (std::size_t r = 0; r < run.motion.frame.size(); ++r)
+      if (run.motion.frame[r] == settings.figure_frame) row = static_cast<Eigen::Index>(r);
+    if (row < 0 || !run.motion.values.row(row).allFinite())
+      warnings.push_back("frame " + std::to_string(settings.figure_frame) +
+                         " was not tracked: no figure drawn");
+    else if (draw_tracked_frame(prefix, settings.figure_frame, model, mapping,
+                                track::pose_of_row(run.motion, row), figure_points.positions,
+                                figure_points.visible, problem))
+      figure_file = prefix + "_frame" + std::to_string(settings.figure_frame) + ".png";
+    else
+      warnings.push_back(problem);
+  }
 
   const long converged = track::converged_frame(run.mean_marker_distance);
   const double level = track::mean_from(run.mean_marker_distance, converged);
@@ -296,7 +320,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (settings.realtime) paragraph << " Real-time pacing: " << deadline_misses << " deadline misses.";
   if (!warnings.empty())
     paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
-  paragraph << "\nWrote " << prefix << ".csv, .mot, .bvh, .json and _markers.csv.";
+  paragraph << "\nWrote " << prefix << ".csv, .mot, .bvh, .json and _markers.csv";
+  if (!figure_file.empty()) paragraph << ", and the figure " << figure_file;
+  paragraph << ".";
   return {summary, paragraph.str()};
 }
 
@@ -395,6 +421,9 @@ const RegisterCommand registration{
       app.add_flag(
           "--smooth", settings->smooth,
           "offline Rauch-Tung-Striebel smoothing of the S2KF's motion (about 17 KB per frame in memory)");
+      app.add_option("--figure", settings->figure_frame,
+                     "draw frame F (0-based) as tracked: PREFIX_frameF.png/.svg, data and gnuplot script")
+          ->check(CLI::NonNegativeNumber);
       app.add_flag("--realtime", settings->realtime,
                    "pace frames at the recording's rate and count deadline misses");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");

@@ -405,6 +405,43 @@ TEST(TrackCommand, TracksWithACalibratedSubjectFileAndSmooths) {
   EXPECT_LT(t.limb_flexion_rms_deg, 4.0);  // measured 2.7 with the marker set alone, smoothed
 }
 
+TEST(TrackCommand, DrawsATrackedFrame) {
+  const fs::path out = scratch("figure") / "walk";
+  CommandResult r =
+      run_command("track " + data("walk.c3d") + " --no-calibrate --figure 200 --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  // Four blocks: 50 recorded markers, 50 model markers, the bones, 50 residual lines.
+  std::ifstream in(out.string() + "_frame200.csv");
+  std::string line;
+  std::vector<int> rows_per_block(1, 0);
+  int blank = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') {
+      if (line.empty() && ++blank == 2) rows_per_block.push_back(0);
+      continue;
+    }
+    blank = 0;
+    ++rows_per_block.back();
+    double x, y, z;
+    char c1, c2;
+    std::istringstream values(line);
+    ASSERT_TRUE(values >> x >> c1 >> y >> c2 >> z) << line;
+    EXPECT_LT(std::abs(z), 3000) << line;
+  }
+  ASSERT_EQ(rows_per_block.size(), 4u);
+  EXPECT_EQ(rows_per_block[0], 50);
+  EXPECT_EQ(rows_per_block[1], 50);
+  EXPECT_GT(rows_per_block[2], 2 * 15);  // two points per bone
+  EXPECT_EQ(rows_per_block[3], 2 * 50);
+  if (std::system("command -v gnuplot > /dev/null 2>&1") == 0) {
+    EXPECT_GT(fs::file_size(out.string() + "_frame200.png"), 10000u);
+    EXPECT_NE(r.output.find("the figure"), std::string::npos) << r.output;
+  }
+  r = run_command("track " + data("walk.c3d") + " --figure 100000 --out " + out.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("beyond its 551 frames"), std::string::npos) << r.output;
+}
+
 TEST(TrackCommand, TracksSeveralRecordingsIntoADirectory) {
   const fs::path out = scratch("batch");
   const CommandResult r = run_command("track " + data("walk.c3d") + " " + data("cartwheel.c3d") +
