@@ -3,11 +3,11 @@
 #include "calibration_hook.hpp"
 #include "command.hpp"
 #include "marker_set_json.hpp"
+#include "subject_height.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/tracker_options.hpp>
 
 #include <nlohmann/json.hpp>
@@ -60,31 +60,12 @@ void run_calibrate(const CalibrateSettings& settings) {
     throw UserError(settings.input + ": only " + std::to_string(choice.mapping.markers_used()) +
                     " of its labels are markers of the set " + choice.set.name + "; at least " +
                     std::to_string(options.min_markers_to_start) + " are needed");
-  double height = settings.height_mm;
-  std::string height_source = "given";
-  if (height <= 0 && choice.set.height_mm) {
-    height = *choice.set.height_mm;
-    height_source = "from the marker-set file";
-  }
-  if (height <= 0) {
-    track::HeightEstimator estimator(choice.model, choice.mapping);
-    c3d::Frame frame;
-    const std::int64_t step = std::max<std::int64_t>(1, info.frame_count / 200);
-    for (std::int64_t f = 0; f < info.frame_count; f += step) {
-      reader->seek_frame(f);
-      if (!reader->read_frame(frame)) break;
-      estimator.add_frame(frame.positions, frame.visible);
-    }
-    const auto estimate = estimator.height_mm();
-    if (!estimate)
-      throw UserError(settings.input +
-                      ": the body height cannot be estimated from the markers; give --height");
-    height = *estimate;
-    height_source = "estimated from rigid marker pairs";
-  }
-  if (!(height > 300 && height < 3000))
-    throw UserError(settings.input + ": a body height of " + fixed(height, 0) +
-                    " mm is not a person's; check the file's units or give --height");
+  const std::optional<SubjectHeight> found =
+      subject_height(*reader, choice, settings.height_mm, settings.input);
+  if (!found)
+    throw UserError(settings.input + ": the body height cannot be estimated from the markers; give --height");
+  const double height = found->mm;
+  const std::string& height_source = found->source;
   const body::BodyModel model = choice.model.scaled(height);
   const track::SubjectCalibration calibration =
       calibrate_recording(*reader, model, choice, options, info.rate, settings.iterations, settings.frames,

@@ -4,13 +4,13 @@
 #include "command.hpp"
 #include "frame_figure.hpp"
 #include "marker_set_json.hpp"
+#include "subject_height.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/io/bvh.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
@@ -121,35 +121,13 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                     std::to_string(info.frame_count) + " frames (0-based)");
   std::vector<std::string> warnings = info.warnings;
   warnings.insert(warnings.end(), choice.warnings.begin(), choice.warnings.end());
-  double height = settings.height_mm;
-  std::string height_source = "given";
-  if (height <= 0 && choice.set.height_mm) {
-    height = *choice.set.height_mm;
-    height_source = "from the marker-set file";
+  std::optional<SubjectHeight> found = subject_height(*reader, choice, settings.height_mm, input);
+  if (!found) {
+    found = SubjectHeight{1750, "default (no two markers on one segment to estimate it from)"};
+    warnings.push_back("body height not estimable from the markers; 1750 mm assumed (use --height)");
   }
-  if (height <= 0) {
-    // Rigid marker pairs over up to 200 frames spread through the recording.
-    track::HeightEstimator estimator(model, mapping);
-    c3d::Frame frame;
-    const std::int64_t step = std::max<std::int64_t>(1, info.frame_count / 200);
-    for (std::int64_t f = 0; f < info.frame_count; f += step) {
-      reader->seek_frame(f);
-      if (!reader->read_frame(frame)) break;
-      estimator.add_frame(frame.positions, frame.visible);
-    }
-    if (auto estimate = estimator.height_mm()) {
-      height = *estimate;
-      height_source = "estimated from " + std::to_string(estimator.pair_count()) + " rigid marker pairs";
-    } else {
-      height = 1750;
-      height_source = "default (no two markers on one segment to estimate it from)";
-      warnings.push_back("body height not estimable from the markers; 1750 mm assumed (use --height)");
-    }
-    reader->seek_frame(0);
-  }
-  if (!(height > 300 && height < 3000))
-    throw UserError(input + ": a body height of " + format(height, 0) +
-                    " mm is not a person's; check the file's units or give --height");
+  const double height = found->mm;
+  const std::string height_source = found->source;
   model = model.scaled(height);
 
   // Subject calibration: marker offsets and bone lengths fitted on the recording's first frames.
