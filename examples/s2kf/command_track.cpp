@@ -132,15 +132,23 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
 
   // Subject calibration: marker offsets and bone lengths fitted on the recording's first frames.
   nlohmann::json calibration_summary = nullptr;
-  const bool calibrate = settings.calibrate && settings.subject.empty();
+  bool calibrate = settings.calibrate && settings.subject.empty();
   if (calibrate) {
-    const track::SubjectCalibration calibration = calibrate_recording(
-        *reader, model, choice, options, info.rate, 3, settings.calibration_frames, false);
-    model = calibration.model;
-    calibration_summary = {{"frames", std::min<std::int64_t>(settings.calibration_frames, info.frame_count)},
-                           {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},
-                           {"mean_marker_distance_after_mm", calibration.mean_marker_distance_after_mm},
-                           {"segment_scale", calibration.segment_scale}};
+    try {
+      const track::SubjectCalibration calibration = calibrate_recording(
+          *reader, model, choice, options, info.rate, 3, settings.calibration_frames, false);
+      model = calibration.model;
+      calibration_summary = {
+          {"frames", std::min<std::int64_t>(settings.calibration_frames, info.frame_count)},
+          {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},
+          {"mean_marker_distance_after_mm", calibration.mean_marker_distance_after_mm},
+          {"segment_scale", calibration.segment_scale}};
+    } catch (const UserError& e) {
+      // Too few usable frames to fit a subject: track with the marker set as it is, and say so.
+      calibrate = false;
+      warnings.push_back(std::string("subject not calibrated (") + e.what() +
+                         "); the marker set is used as it is");
+    }
   }
 
   std::unique_ptr<track::Tracker> s2kf_tracker;

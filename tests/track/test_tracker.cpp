@@ -405,6 +405,18 @@ TEST(TrackCommand, TracksWithACalibratedSubjectFileAndSmooths) {
   EXPECT_LT(t.limb_flexion_rms_deg, 4.0);  // measured 2.7 with the marker set alone, smoothed
 }
 
+TEST(TrackCommand, TooShortToCalibrateTracksWithTheMarkerSetAndSaysSo) {
+  const std::string base = simulate("short_walk", "--motion walk --frames 15");
+  const fs::path out = scratch("short") / "short_walk";
+  const CommandResult r = run_command("track " + base + ".c3d --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("tracked 15 of 15 frames"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("calibrated on"), std::string::npos) << r.output;
+  const std::string summary = read_text(out.string() + ".json");
+  EXPECT_NE(summary.find("subject not calibrated"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"calibration\": null"), std::string::npos) << summary;
+}
+
 TEST(TrackCommand, DrawsATrackedFrame) {
   const fs::path out = scratch("figure") / "walk";
   CommandResult r =
