@@ -12,6 +12,8 @@
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
+#include "cli_runner.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -34,20 +36,8 @@ fs::path scratch(const std::string& name) {
   return dir;
 }
 
-struct CommandResult {
-  int status;
-  std::string output;
-};
-
-CommandResult run_command(const std::string& arguments) {
-  const std::string command = std::string(S2KF_CLI) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (pipe && fgets(buffer, sizeof buffer, pipe)) output += buffer;
-  const int status = pipe ? pclose(pipe) : -1;
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using test_support::CommandResult;
+using test_support::run_command;
 
 std::vector<std::string> labels_of(const c3d::Recording& recording) {
   std::vector<std::string> labels;

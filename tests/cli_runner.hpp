@@ -1,0 +1,29 @@
+/// @file
+/// Running the s2kf program from a test: its exit status and everything it printed (stdout and
+/// stderr together).
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <string>
+
+namespace s2kf::test_support {
+
+struct CommandResult {
+  int status;  ///< exit status; -1 when the program did not exit normally
+  std::string output;
+};
+
+/// Runs `S2KF_CLI arguments` through the shell.
+inline CommandResult run_command(const std::string& arguments) {
+  const std::string command = std::string(S2KF_CLI) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  while (pipe && fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  const int status = pipe ? pclose(pipe) : -1;
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+}  // namespace s2kf::test_support
