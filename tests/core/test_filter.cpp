@@ -110,6 +110,32 @@ TEST(S2kfLinear, UpdateReproducesClosedFormKalmanFilterForEverySampleSet) {
   }
 }
 
+TEST(S2kfLinear, TrackingSizedUpdateMatchesKalmanFilter) {
+  // 46 states and 150 measurement rows, as the tracker with 50 markers: Cyy is then large enough
+  // that the filter splits its triangular solve (more than 96 rows); with 60 rows hidden it does not.
+  std::mt19937_64 rng(5);
+  const int n = 46, m = 150;
+  for (const SampleSet& set : {s2kf::ukf_sample_set(n), s2kf::compute_lcd_sample_set(n, 301).set}) {
+    for (const int hidden : {0, 60}) {
+      S2kf filter(set);
+      LinearModel model{random_matrix(m, n, rng), random_matrix(m, 1, rng)};
+      GaussianXd s2(random_matrix(n, 1, rng), random_spd(n, rng));
+      GaussianXd kf = s2;
+      const Eigen::MatrixXd r = random_spd(m, rng);
+      const Eigen::VectorXd y = random_matrix(m, 1, rng);
+      ObservedMask observed = ObservedMask::Constant(m, true);
+      for (int i = 0; i < hidden; ++i) observed(2 * i) = false;
+      const auto result = filter.update(s2, model, y, r, observed);
+      ASSERT_TRUE(result.ok()) << s2kf::to_string(result.status);
+      EXPECT_EQ(result.observed, m - hidden);
+      kalman_update(kf, model.h, y - model.offset, r, observed);
+      EXPECT_LT(relative_error(s2.mean, kf.mean), 1e-9) << set.kind << ", " << hidden << " hidden";
+      EXPECT_LT(relative_error(s2.covariance, kf.covariance), 1e-9)
+          << set.kind << ", " << hidden << " hidden";
+    }
+  }
+}
+
 TEST(S2kfLinear, SeveralStepsWithPredictionAndAMissingComponentMatchKalmanFilter) {
   std::mt19937_64 rng(2);
   const int n = 5, m = 4;
