@@ -22,6 +22,7 @@
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/io/motion_stream_writer.hpp>
 
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/height_estimate.hpp>

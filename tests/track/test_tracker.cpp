@@ -3,8 +3,11 @@
 // Thresholds: measured on the bundled recordings (docs/tracking.md gives the numbers), with about
 // 30 % margin for a change of seed or sample set; a wrong formula (a sign, an axis order, a missing
 // re-centring) moves these errors by far more.
+#include <s2kf/io/bvh.hpp>
 #include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/io/motion_stream_writer.hpp>
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
@@ -16,12 +19,30 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iomanip>
+#include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+
+#if defined(__SANITIZE_ADDRESS__)
+#define S2KF_TEST_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define S2KF_TEST_UNDER_ASAN 1
+#endif
+#endif
 
 namespace {
 
@@ -36,6 +57,13 @@ fs::path scratch(const std::string& name) {
   return dir;
 }
 
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 using test_support::CommandResult;
 using test_support::run_command;
 
@@ -46,6 +74,7 @@ std::vector<std::string> labels_of(const c3d::Recording& recording) {
 }
 
 struct Tracked {
+  body::BodyModel model;  // scaled to the estimated height
   track::TrackingRun run;
   track::TruthComparison truth;
   long converged = 0;
@@ -67,6 +96,7 @@ Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& 
   Tracked result;
   result.height_mm = heights.height_mm().value_or(1750);
   model = model.scaled(result.height_mm);
+  result.model = model;
   track::Tracker tracker(model, mapping, options, recording.info.rate);
   const Eigen::Index end = frames > 0 ? std::min(frames, recording.frame_count()) : recording.frame_count();
   Eigen::Index f = 0;
@@ -345,13 +375,6 @@ TEST(TrackCommand, BadInputGivesASentenceAndNonZeroExit) {
   EXPECT_FALSE(fs::exists(out.string() + ".csv"));
 }
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 TEST(TrackCommand, CalibratesByDefaultAndLowersTheMarkerDistance) {
   const fs::path out = scratch("calibrated") / "walk";
   const CommandResult r =
@@ -451,6 +474,182 @@ TEST(TrackCommand, TracksSeveralRecordingsIntoADirectory) {
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(out / "walk.csv"));
   EXPECT_TRUE(fs::exists(out / "cartwheel.bvh"));
+}
+
+// ---- streamed outputs ----
+
+// A fresh, empty scratch directory.
+fs::path empty_scratch(const std::string& name) {
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::vector<std::string> file_names(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// `frames` rows of random poses from frame 10 on at 120 Hz; the rows in `untracked` are NaN, and
+// row `partial` (if any) has one NaN and one infinite value.
+io::MotionTable random_motion(const body::BodyModel& model, long frames, const std::vector<long>& untracked,
+                              long partial = -1) {
+  std::mt19937 rng(static_cast<unsigned>(frames) + 11);
+  std::uniform_real_distribution<double> position(-2000, 2000), angle(-3, 3);
+  io::MotionTable motion;
+  motion.joint_names = model.joint_names();
+  motion.values.resize(frames, 6 + model.joint_count());
+  for (long r = 0; r < frames; ++r) {
+    motion.frame.push_back(10 + r);
+    motion.time.push_back(static_cast<double>(10 + r) / 120.0);
+    for (Eigen::Index c = 0; c < motion.values.cols(); ++c)
+      motion.values(r, c) = c < 3 ? position(rng) : angle(rng);
+  }
+  for (long r : untracked) motion.values.row(r).setConstant(NAN);
+  if (partial >= 0) {
+    motion.values(partial, 7) = NAN;
+    motion.values(partial, 9) = INFINITY;
+  }
+  return motion;
+}
+
+TEST(MotionStreamWriter, WritesWhatTheBatchWritersWriteWhereverRowsAreUntracked) {
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const std::vector<std::pair<std::string, io::MotionTable>> cases = {
+      {"start_middle_end", random_motion(model, 14, {0, 1, 5, 6, 13}, 9)},
+      {"all_untracked", random_motion(model, 5, {0, 1, 2, 3, 4})},
+      {"all_tracked", random_motion(model, 4, {})},
+      {"no_rows", random_motion(model, 0, {})}};
+  for (const auto& [name, motion] : cases) {
+    SCOPED_TRACE(name);
+    const fs::path dir = empty_scratch("stream_" + name);
+    const std::string batch = (dir / "batch").string(), stream = (dir / "stream").string();
+    io::save_motion_csv(batch + ".csv", motion);
+    io::save_opensim_mot(batch + ".mot", motion, name);
+    io::save_bvh(batch + ".bvh", model, motion, 120);
+    io::MotionStreamWriter writer({stream + ".csv", stream + ".mot", stream + ".bvh"}, model, 120, name);
+    for (Eigen::Index r = 0; r < motion.frames(); ++r)
+      writer.append(motion.frame[r], motion.time[r], motion.values.row(r).transpose());
+    EXPECT_FALSE(fs::exists(stream + ".csv"));  // nothing under the target names before finish()
+    writer.finish();
+    for (const char* ext : {".csv", ".mot", ".bvh"})
+      EXPECT_TRUE(read_text(stream + ext) == read_text(batch + ext))
+          << ext << " differs:\n"
+          << read_text(stream + ext) << "\nbatch:\n"
+          << read_text(batch + ext);
+    EXPECT_EQ(file_names(dir), (std::vector<std::string>{"batch.bvh", "batch.csv", "batch.mot", "stream.bvh",
+                                                         "stream.csv", "stream.mot"}));
+  }
+}
+
+// A stand-in for the tracker: frames before `start` are not tracked, later ones give a pose made
+// from the frame number.
+struct ScriptedTracker {
+  long start = 2;
+  long calls = 0;
+  track::FrameEstimate estimate;
+  template <typename Positions, typename Visible>
+  const track::FrameEstimate& process(const Positions&, const Visible&) {
+    estimate.tracked = calls >= start;
+    estimate.status = FilterStatus::ok;
+    estimate.pose.root_position = Eigen::Vector3d(1, 2, 3) * static_cast<double>(calls);
+    estimate.pose.root_rpy = Eigen::Vector3d(0.1, 0.2, 0.3);
+    estimate.pose.joints.setConstant(0.01 * static_cast<double>(calls));
+    estimate.visible_markers = static_cast<int>(calls);
+    estimate.mean_marker_distance = estimate.tracked ? 5.0 : NAN;
+    ++calls;
+    return estimate;
+  }
+};
+
+TEST(TrackingRun, ASinkGetsEveryRowAndTheRunKeepsNoTable) {
+  const body::BodyModel model = body::mmm_body_model(1750);
+  auto frames = [](long count) {
+    return [count, f = 0L](c3d::Frame& frame) mutable {
+      frame.index = f;
+      return f++ < count;
+    };
+  };
+  ScriptedTracker kept_tracker;
+  const track::TrackingRun kept = track::run_tracking(kept_tracker, frames(6), 50, model.joint_names());
+  ScriptedTracker streamed_tracker;
+  io::MotionTable rows;
+  rows.joint_names = model.joint_names();
+  rows.values.resize(6, 6 + model.joint_count());
+  std::vector<int> visible;
+  const track::TrackingRun streamed = track::run_tracking(
+      streamed_tracker, frames(6), 50, model.joint_names(), false, {}, [&](const track::TrackedFrame& f) {
+        EXPECT_EQ(f.index, static_cast<long>(rows.frame.size()));
+        rows.values.row(f.index) = f.values.transpose();
+        rows.frame.push_back(f.frame);
+        rows.time.push_back(f.time);
+        visible.push_back(f.estimate.visible_markers);
+      });
+  EXPECT_EQ(kept.frames, 6);
+  EXPECT_EQ(kept.frames_tracked, 4);
+  EXPECT_EQ(streamed.frames, 6);
+  EXPECT_EQ(streamed.frames_tracked, 4);
+  EXPECT_EQ(streamed.motion.joint_names, model.joint_names());
+  EXPECT_EQ(streamed.motion.values.size(), 0);
+  EXPECT_TRUE(streamed.motion.frame.empty() && streamed.motion.time.empty());
+  EXPECT_TRUE(streamed.visible_markers.empty());
+  EXPECT_EQ(streamed.mean_marker_distance.size(), 6u);
+  EXPECT_EQ(streamed.seconds.size(), 6u);
+  EXPECT_EQ(rows.frame, kept.motion.frame);
+  EXPECT_EQ(rows.time, kept.motion.time);
+  EXPECT_EQ(visible, kept.visible_markers);
+  EXPECT_TRUE(rows.values.topRows(2).array().isNaN().all());
+  EXPECT_TRUE(rows.values.bottomRows(4).isApprox(kept.motion.values.bottomRows(4), 0));
+}
+
+TEST(MotionStreamWriter, AnAbandonedWriterLeavesNoTargetAndNoTemporary) {
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const fs::path dir = empty_scratch("stream_abandoned");
+  std::ofstream(dir / "x.csv") << "an earlier result\n";
+  const io::MotionFilePaths paths{(dir / "x.csv").string(), (dir / "x.mot").string(),
+                                  (dir / "x.bvh").string()};
+  const io::MotionTable motion = random_motion(model, 6, {0, 3});
+  {
+    io::MotionStreamWriter writer(paths, model, 100, "x");
+    for (Eigen::Index r = 0; r < motion.frames(); ++r)
+      writer.append(motion.frame[r], motion.time[r], motion.values.row(r).transpose());
+    EXPECT_GT(file_names(dir).size(), 1u);  // the temporaries
+  }                                         // destroyed without finish()
+  EXPECT_EQ(file_names(dir), std::vector<std::string>{"x.csv"});
+  EXPECT_EQ(read_text((dir / "x.csv").string()), "an earlier result\n");
+
+  // Tracking stops with an error (a file that ends inside a frame) while the rows stream.
+  bool failed = false;
+  try {
+    io::MotionStreamWriter writer(paths, model, 100, "x");
+    ScriptedTracker tracker;
+    long f = 0;
+    auto frames = [&](c3d::Frame& frame) {
+      if (f == 5) throw std::runtime_error("the file ends inside frame 5");
+      frame.index = f++;
+      return true;
+    };
+    track::run_tracking(tracker, frames, 100, model.joint_names(), false, {},
+                        [&](const track::TrackedFrame& t) { writer.append(t.frame, t.time, t.values); });
+    writer.finish();
+  } catch (const std::runtime_error& e) {
+    failed = true;
+    EXPECT_NE(std::string(e.what()).find("inside frame 5"), std::string::npos);
+  }
+  EXPECT_TRUE(failed);
+  EXPECT_EQ(file_names(dir), std::vector<std::string>{"x.csv"});
+  EXPECT_EQ(read_text((dir / "x.csv").string()), "an earlier result\n");
+
+  // A row of the wrong length is refused; finished, the writer replaces the earlier file.
+  io::MotionStreamWriter writer(paths, model, 100, "x");
+  EXPECT_THROW(writer.append(0, 0, Eigen::VectorXd::Zero(5)), std::invalid_argument);
+  writer.append_untracked(0, 0);
+  writer.finish();
+  EXPECT_EQ(file_names(dir), (std::vector<std::string>{"x.bvh", "x.csv", "x.mot"}));
+  EXPECT_NE(read_text((dir / "x.csv").string()), "an earlier result\n");
 }
 
 }  // namespace

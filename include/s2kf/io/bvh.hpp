@@ -12,114 +12,106 @@
 #include <functional>
 #include <iomanip>
 #include <ostream>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace s2kf::io {
 
+/// The BVH skeleton of a body model: its hierarchy text and how a motion row becomes a line of
+/// channel values. write_bvh and MotionStreamWriter both write through it.
+///
 /// BVH is Y-up and these files are in centimetres: a model point (x right, y forward, z up, mm)
 /// becomes (x, z, -y) / 10. The same change of basis turns a rotation about the model's x, z, y axes
 /// into one about BVH's X, Y, -Z, so every joint group keeps its x-z-y order as channels
 /// "Xrotation Yrotation Zrotation" with values (qx, qz, -qy) in degrees. The root's
 /// Rz(yaw) Ry(pitch) Rx(roll) becomes "Yrotation Zrotation Xrotation" = (yaw, -pitch, roll).
-/// Frames without a finite pose (not tracked) repeat the nearest tracked pose, since BVH has no
-/// notion of a missing frame.
-inline void write_bvh(std::ostream& out, const body::BodyModel& model, const MotionTable& motion,
-                      double rate_hz) {
-  motion.check();
-  if (static_cast<int>(motion.joint_names.size()) != model.joint_count())
-    throw std::invalid_argument("write_bvh: the motion's joints do not match the body model");
-  auto to_bvh = [](const Eigen::Vector3d& v) -> Eigen::Vector3d {
-    return Eigen::Vector3d(v.x(), v.z(), -v.y()) / 10.0;
-  };
-  const double degrees = 180.0 / 3.14159265358979323846;
-
-  // One BVH joint per anatomical group (BP, BT, LS, ...): its DoFs are consecutive joints.
-  struct Group {
-    std::string name;
-    std::vector<int> dofs;
-    int parent = -1;  // group index, -1 = root
-    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-  };
-  std::vector<Group> groups;
-  std::vector<int> group_of_joint(model.joint_count(), -1);
-  for (int j = 0; j < model.joint_count(); ++j) {
-    const body::Joint& joint = model.joints[j];
-    const int parent_joint = joint.parent_joint();
-    if (parent_joint >= 0 && model.joints[parent_joint].group == joint.group) {
-      group_of_joint[j] = group_of_joint[parent_joint];
-      groups[group_of_joint[j]].dofs.push_back(j);
-      continue;
+class BvhSkeleton {
+ public:
+  explicit BvhSkeleton(const body::BodyModel& model) {
+    for (const body::Joint& joint : model.joints) axes_.push_back(joint.axis);
+    // One BVH joint per anatomical group (BP, BT, LS, ...): its DoFs are consecutive joints.
+    std::vector<int> group_of_joint(model.joint_count(), -1);
+    for (int j = 0; j < model.joint_count(); ++j) {
+      const body::Joint& joint = model.joints[j];
+      const int parent_joint = joint.parent_joint();
+      if (parent_joint >= 0 && model.joints[parent_joint].group == joint.group) {
+        group_of_joint[j] = group_of_joint[parent_joint];
+        groups_[group_of_joint[j]].dofs.push_back(j);
+        continue;
+      }
+      Group group;
+      group.name = joint.group;
+      group.dofs = {j};
+      group.parent = parent_joint >= 0 ? group_of_joint[parent_joint] : -1;
+      group.offset = joint.translation;
+      group_of_joint[j] = static_cast<int>(groups_.size());
+      groups_.push_back(group);
     }
-    Group group;
-    group.name = joint.group;
-    group.dofs = {j};
-    group.parent = parent_joint >= 0 ? group_of_joint[parent_joint] : -1;
-    group.offset = joint.translation;
-    group_of_joint[j] = static_cast<int>(groups.size());
-    groups.push_back(group);
-  }
-  // End sites: the mean offset of the markers on a leaf group's last frame (e.g. the foot markers).
-  std::vector<bool> has_child(groups.size(), false);
-  for (const Group& g : groups)
-    if (g.parent >= 0) has_child[g.parent] = true;
+    // End sites: the mean offset of the markers on a leaf group's last frame (e.g. the foot markers).
+    std::vector<bool> has_child(groups_.size(), false);
+    for (const Group& g : groups_)
+      if (g.parent >= 0) has_child[g.parent] = true;
 
-  out << std::fixed << std::setprecision(4) << "HIERARCHY\nROOT pelvis\n{\n  OFFSET 0 0 0\n"
-      << "  CHANNELS 6 Xposition Yposition Zposition Yrotation Zrotation Xrotation\n";
-  std::vector<int> order;  // groups in the order their channels appear
-  const std::function<void(int, int)> write_group = [&](int g, int depth) {
-    const std::string pad(2 * depth, ' ');
-    const Eigen::Vector3d offset = to_bvh(groups[g].offset);
-    out << pad << "JOINT " << groups[g].name << "\n"
-        << pad << "{\n"
-        << pad << "  OFFSET " << offset.x() << " " << offset.y() << " " << offset.z() << "\n"
-        << pad << "  CHANNELS 3 Xrotation Yrotation Zrotation\n";
-    order.push_back(g);
-    for (std::size_t c = 0; c < groups.size(); ++c)
-      if (groups[c].parent == g) write_group(static_cast<int>(c), depth + 1);
-    if (!has_child[g]) {
-      const int last_frame = groups[g].dofs.back() + 1;
-      Eigen::Vector3d tip = Eigen::Vector3d::Zero();
-      int count = 0;
-      for (const body::Marker& marker : model.markers)
-        if (marker.frame == last_frame) tip += marker.offset, ++count;
-      if (count) tip /= count;
-      const Eigen::Vector3d end = to_bvh(tip);
-      out << pad << "  End Site\n"
-          << pad << "  {\n"
-          << pad << "    OFFSET " << end.x() << " " << end.y() << " " << end.z() << "\n"
-          << pad << "  }\n";
-    }
-    out << pad << "}\n";
-  };
-  for (std::size_t g = 0; g < groups.size(); ++g)
-    if (groups[g].parent < 0) write_group(static_cast<int>(g), 1);
-  out << "}\nMOTION\nFrames: " << motion.frames() << "\nFrame Time: " << std::setprecision(8) << 1.0 / rate_hz
-      << "\n"
-      << std::setprecision(4);
-
-  // Rows to print: each untracked row takes the nearest tracked one (earlier ones the first).
-  std::vector<Eigen::Index> source(motion.frames(), -1);
-  Eigen::Index last = -1;
-  for (Eigen::Index r = 0; r < motion.frames(); ++r) {
-    if (motion.values.row(r).allFinite()) last = r;
-    source[r] = last;
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(4) << "HIERARCHY\nROOT pelvis\n{\n  OFFSET 0 0 0\n"
+        << "  CHANNELS 6 Xposition Yposition Zposition Yrotation Zrotation Xrotation\n";
+    const std::function<void(int, int)> write_group = [&](int g, int depth) {
+      const std::string pad(2 * depth, ' ');
+      const Eigen::Vector3d offset = to_bvh(groups_[g].offset);
+      out << pad << "JOINT " << groups_[g].name << "\n"
+          << pad << "{\n"
+          << pad << "  OFFSET " << offset.x() << " " << offset.y() << " " << offset.z() << "\n"
+          << pad << "  CHANNELS 3 Xrotation Yrotation Zrotation\n";
+      order_.push_back(g);
+      for (std::size_t c = 0; c < groups_.size(); ++c)
+        if (groups_[c].parent == g) write_group(static_cast<int>(c), depth + 1);
+      if (!has_child[g]) {
+        const int last_frame = groups_[g].dofs.back() + 1;
+        Eigen::Vector3d tip = Eigen::Vector3d::Zero();
+        int count = 0;
+        for (const body::Marker& marker : model.markers)
+          if (marker.frame == last_frame) tip += marker.offset, ++count;
+        if (count) tip /= count;
+        const Eigen::Vector3d end = to_bvh(tip);
+        out << pad << "  End Site\n"
+            << pad << "  {\n"
+            << pad << "    OFFSET " << end.x() << " " << end.y() << " " << end.z() << "\n"
+            << pad << "  }\n";
+      }
+      out << pad << "}\n";
+    };
+    for (std::size_t g = 0; g < groups_.size(); ++g)
+      if (groups_[g].parent < 0) write_group(static_cast<int>(g), 1);
+    out << "}\n";
+    hierarchy_ = out.str();
   }
-  Eigen::Index first_tracked = -1;
-  for (Eigen::Index r = 0; r < motion.frames() && first_tracked < 0; ++r)
-    if (motion.values.row(r).allFinite()) first_tracked = r;
-  for (Eigen::Index r = 0; r < motion.frames(); ++r) {
-    const Eigen::Index s = source[r] >= 0 ? source[r] : first_tracked;
-    Eigen::VectorXd v = Eigen::VectorXd::Zero(motion.values.cols());
-    if (s >= 0) v = motion.values.row(s).transpose();
-    const Eigen::Vector3d position = to_bvh(v.head<3>());
-    out << position.x() << " " << position.y() << " " << position.z() << " " << v(5) * degrees << " "
-        << -v(4) * degrees << " " << v(3) * degrees;
-    for (int g : order) {
+
+  /// Joints of the model (the motion rows hold 6 + this many values).
+  int joint_count() const { return static_cast<int>(axes_.size()); }
+
+  /// "HIERARCHY" up to the closing brace of the root.
+  void write_hierarchy(std::ostream& out) const { out << hierarchy_; }
+
+  /// "MOTION", the frame count and the frame time.
+  static void write_motion_header(std::ostream& out, long frames, double rate_hz) {
+    out << std::fixed << "MOTION\nFrames: " << frames << "\nFrame Time: " << std::setprecision(8)
+        << 1.0 / rate_hz << "\n";
+  }
+
+  /// One frame line: the root's 6 channels, then 3 per joint group (fixed, 4 decimals). `values`
+  /// must be finite (BVH has no missing frames: write_bvh repeats a tracked row instead).
+  void write_row(std::ostream& out, const MotionRowRef& values) const {
+    const double degrees = 180.0 / 3.14159265358979323846;
+    const Eigen::Vector3d position = to_bvh(values.head<3>());
+    out << std::fixed << std::setprecision(4) << position.x() << " " << position.y() << " " << position.z()
+        << " " << values(5) * degrees << " " << -values(4) * degrees << " " << values(3) * degrees;
+    for (int g : order_) {
       double channel[3] = {0, 0, 0};  // X, Y, Z
-      for (int j : groups[g].dofs) {
-        const double q = v(6 + j) * degrees;
-        switch (model.joints[j].axis) {
+      for (int j : groups_[g].dofs) {
+        const double q = values(6 + j) * degrees;
+        switch (axes_[j]) {
           case body::Axis::x:
             channel[0] = q;
             break;
@@ -134,6 +126,49 @@ inline void write_bvh(std::ostream& out, const body::BodyModel& model, const Mot
       out << " " << channel[0] << " " << channel[1] << " " << channel[2];
     }
     out << "\n";
+  }
+
+ private:
+  struct Group {
+    std::string name;
+    std::vector<int> dofs;
+    int parent = -1;  // group index, -1 = root
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  };
+
+  static Eigen::Vector3d to_bvh(const Eigen::Vector3d& v) {
+    return Eigen::Vector3d(v.x(), v.z(), -v.y()) / 10.0;
+  }
+
+  std::vector<body::Axis> axes_;
+  std::vector<Group> groups_;
+  std::vector<int> order_;  // groups in the order their channels appear
+  std::string hierarchy_;
+};
+
+/// BVH of a motion (see BvhSkeleton for the axes and units). Frames without a finite pose (not
+/// tracked) repeat the nearest earlier tracked pose, those before the first tracked frame the first
+/// tracked pose, since BVH has no notion of a missing frame; a motion without any tracked frame is
+/// written as the rest pose.
+inline void write_bvh(std::ostream& out, const body::BodyModel& model, const MotionTable& motion,
+                      double rate_hz) {
+  motion.check();
+  if (static_cast<int>(motion.joint_names.size()) != model.joint_count())
+    throw std::invalid_argument("write_bvh: the motion's joints do not match the body model");
+  const BvhSkeleton skeleton(model);
+  skeleton.write_hierarchy(out);
+  BvhSkeleton::write_motion_header(out, static_cast<long>(motion.frames()), rate_hz);
+  Eigen::Index first_tracked = -1;
+  for (Eigen::Index r = 0; r < motion.frames() && first_tracked < 0; ++r)
+    if (is_tracked_row(motion.values.row(r).transpose())) first_tracked = r;
+  const Eigen::VectorXd rest = Eigen::VectorXd::Zero(motion.values.cols());
+  Eigen::Index source = first_tracked;
+  for (Eigen::Index r = 0; r < motion.frames(); ++r) {
+    if (is_tracked_row(motion.values.row(r).transpose())) source = r;
+    if (source >= 0)
+      skeleton.write_row(out, motion.values.row(source).transpose());
+    else
+      skeleton.write_row(out, rest);
   }
 }
 

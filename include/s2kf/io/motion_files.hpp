@@ -46,24 +46,62 @@ inline std::vector<std::string> motion_columns(const std::vector<std::string>& j
   return columns;
 }
 
+/// One row of a motion: root position, roll/pitch/yaw and joints (a MotionTable row transposed, or
+/// any vector of 6 + joints values). Rows of a column-major table bind without a copy.
+using MotionRowRef = Eigen::Ref<const Eigen::VectorXd, 0, Eigen::InnerStride<>>;
+
+/// A row is tracked when every value is finite; the formats below leave out (.mot) or fill in (BVH)
+/// the others.
+inline bool is_tracked_row(const MotionRowRef& values) { return values.allFinite(); }
+
+/// The CSV header line of write_motion_csv.
+inline void write_motion_csv_header(std::ostream& out, const std::vector<std::string>& joint_names) {
+  const auto columns = motion_columns(joint_names);
+  for (std::size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c];
+  out << "\n";
+}
+
+/// One CSV line of write_motion_csv: frame, time and the values with %.9g, non-finite ones as "nan".
+inline void write_motion_csv_row(std::ostream& out, long frame, double time, const MotionRowRef& values) {
+  out << std::setprecision(9) << frame << "," << time;
+  for (Eigen::Index c = 0; c < values.size(); ++c) {
+    const double v = values(c);
+    out << ",";
+    if (std::isfinite(v))
+      out << v;
+    else
+      out << "nan";
+  }
+  out << "\n";
+}
+
 /// CSV in mm and rad with full precision (%.9g); untracked values are written as "nan".
 inline void write_motion_csv(std::ostream& out, const MotionTable& motion) {
   motion.check();
-  const auto columns = motion_columns(motion.joint_names);
-  for (std::size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c];
-  out << "\n" << std::setprecision(9);
-  for (Eigen::Index r = 0; r < motion.frames(); ++r) {
-    out << motion.frame[r] << "," << motion.time[r];
-    for (Eigen::Index c = 0; c < motion.values.cols(); ++c) {
-      const double v = motion.values(r, c);
-      out << ",";
-      if (std::isfinite(v))
-        out << v;
-      else
-        out << "nan";
-    }
-    out << "\n";
-  }
+  write_motion_csv_header(out, motion.joint_names);
+  for (Eigen::Index r = 0; r < motion.frames(); ++r)
+    write_motion_csv_row(out, motion.frame[static_cast<std::size_t>(r)],
+                         motion.time[static_cast<std::size_t>(r)], motion.values.row(r).transpose());
+}
+
+/// The header of write_opensim_mot, up to and including the column names; `rows` is the number of
+/// tracked rows that follow.
+inline void write_opensim_mot_header(std::ostream& out, const std::string& name,
+                                     const std::vector<std::string>& joint_names, std::size_t rows) {
+  const auto columns = motion_columns(joint_names);
+  out << name << "\nversion=1\nnRows=" << rows << "\nnColumns=" << columns.size() - 1
+      << "\ninDegrees=yes\nendheader\ntime";
+  for (std::size_t c = 2; c < columns.size(); ++c) out << "\t" << columns[c];
+  out << "\n";
+}
+
+/// One line of write_opensim_mot (of a tracked row): time, root translation in metres, angles in
+/// degrees, tab-separated, %.9g.
+inline void write_opensim_mot_row(std::ostream& out, double time, const MotionRowRef& values) {
+  const double degrees = 180.0 / 3.14159265358979323846;
+  out << std::setprecision(9) << time;
+  for (Eigen::Index c = 0; c < values.size(); ++c) out << "\t" << values(c) * (c < 3 ? 0.001 : degrees);
+  out << "\n";
 }
 
 /// OpenSim motion file: tab-separated, a header ending in "endheader", angles in degrees
@@ -71,21 +109,12 @@ inline void write_motion_csv(std::ostream& out, const MotionTable& motion) {
 /// Untracked frames are left out, since OpenSim cannot read NaN.
 inline void write_opensim_mot(std::ostream& out, const MotionTable& motion, const std::string& name) {
   motion.check();
-  std::vector<Eigen::Index> rows;
+  std::size_t rows = 0;
+  for (Eigen::Index r = 0; r < motion.frames(); ++r) rows += is_tracked_row(motion.values.row(r).transpose());
+  write_opensim_mot_header(out, name, motion.joint_names, rows);
   for (Eigen::Index r = 0; r < motion.frames(); ++r)
-    if (motion.values.row(r).allFinite()) rows.push_back(r);
-  const auto columns = motion_columns(motion.joint_names);
-  out << name << "\nversion=1\nnRows=" << rows.size() << "\nnColumns=" << columns.size() - 1
-      << "\ninDegrees=yes\nendheader\ntime";
-  for (std::size_t c = 2; c < columns.size(); ++c) out << "\t" << columns[c];
-  out << "\n" << std::setprecision(9);
-  const double degrees = 180.0 / 3.14159265358979323846;
-  for (Eigen::Index r : rows) {
-    out << motion.time[r];
-    for (Eigen::Index c = 0; c < motion.values.cols(); ++c)
-      out << "\t" << motion.values(r, c) * (c < 3 ? 0.001 : degrees);
-    out << "\n";
-  }
+    if (is_tracked_row(motion.values.row(r).transpose()))
+      write_opensim_mot_row(out, motion.time[static_cast<std::size_t>(r)], motion.values.row(r).transpose());
 }
 
 inline void save_motion_csv(const std::string& path, const MotionTable& motion) {

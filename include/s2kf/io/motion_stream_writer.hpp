@@ -1,0 +1,185 @@
+/// @file
+/// Writing a motion's CSV, OpenSim .mot and BVH files frame by frame, with memory that does not
+/// grow with the recording: what `s2kf track` uses for recordings of any length.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/io/atomic_file.hpp>
+#include <s2kf/io/bvh.hpp>
+#include <s2kf/io/motion_files.hpp>
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+namespace s2kf::io {
+
+/// Where MotionStreamWriter writes; an empty path leaves that format out.
+struct MotionFilePaths {
+  std::string csv;  ///< write_motion_csv's format
+  std::string mot;  ///< write_opensim_mot's format
+  std::string bvh;  ///< write_bvh's format
+};
+
+/// Writes the motion files save_motion_csv, save_opensim_mot and save_bvh would write for the same
+/// rows, byte for byte, while the rows arrive one per frame (append()); memory stays constant.
+///
+/// The CSV goes straight to `csv + ".tmp"`. The .mot header counts the tracked rows and the BVH
+/// header all frames, so their lines go to `path + ".body.tmp"` first and finish() writes header and
+/// lines to `path + ".tmp"`. Untracked rows (a non-finite value) are left out of the .mot and repeat
+/// the last tracked pose in the BVH; untracked rows before the first tracked one are only counted
+/// and take the first tracked pose when it arrives (the rest pose if none ever does).
+///
+/// Nothing appears under the target names until finish() has written all three files; they are
+/// then renamed one after another. A writer destroyed without finish() (an exception, a failed run)
+/// removes every temporary file and creates or replaces no target.
+class MotionStreamWriter {
+ public:
+  /// `model` gives the joints (columns) and the BVH skeleton, `rate_hz` the BVH frame time and
+  /// `mot_name` the first line of the .mot file.
+  MotionStreamWriter(MotionFilePaths paths, const body::BodyModel& model, double rate_hz,
+                     std::string mot_name)
+      : paths_(std::move(paths)),
+        joint_names_(model.joint_names()),
+        skeleton_(model),
+        rate_hz_(rate_hz),
+        mot_name_(std::move(mot_name)),
+        last_tracked_(Eigen::VectorXd::Zero(6 + model.joint_count())) {
+    if (!paths_.csv.empty()) {
+      csv_.emplace(paths_.csv);
+      write_motion_csv_header(csv_->stream(), joint_names_);
+      csv_->check();
+    }
+    if (!paths_.mot.empty()) mot_body_.emplace(paths_.mot + ".body.tmp");
+    if (!paths_.bvh.empty()) bvh_body_.emplace(paths_.bvh + ".body.tmp");
+  }
+  MotionStreamWriter(const MotionStreamWriter&) = delete;
+  MotionStreamWriter& operator=(const MotionStreamWriter&) = delete;
+  ~MotionStreamWriter() = default;  // the members remove their temporary files unless finished
+
+  /// Columns of a row: 6 (root position, roll/pitch/yaw) + joints.
+  Eigen::Index columns() const { return last_tracked_.size(); }
+  long frames() const { return frames_; }
+  long tracked_frames() const { return tracked_; }
+  bool finished() const { return finished_; }
+
+  /// Adds the next frame: its number in the recording, its time (s) and its row of columns() values
+  /// (NaN where the frame was not tracked). Throws std::runtime_error when a file cannot be written.
+  void append(long frame, double time, const MotionRowRef& values) {
+    if (finished_) throw std::logic_error("MotionStreamWriter::append after finish()");
+    if (values.size() != columns())
+      throw std::invalid_argument("MotionStreamWriter::append: a row of " + std::to_string(values.size()) +
+                                  " values, expected " + std::to_string(columns()));
+    if (csv_) {
+      write_motion_csv_row(csv_->stream(), frame, time, values);
+      csv_->check();
+    }
+    ++frames_;
+    if (!is_tracked_row(values)) {
+      if (tracked_ == 0)
+        ++untracked_before_first_;
+      else if (bvh_body_)
+        skeleton_.write_row(bvh_body_->stream(), last_tracked_);
+    } else {
+      if (mot_body_) write_opensim_mot_row(mot_body_->stream(), time, values);
+      if (bvh_body_)
+        for (long r = tracked_ == 0 ? untracked_before_first_ : 0; r >= 0; --r)
+          skeleton_.write_row(bvh_body_->stream(), values);
+      last_tracked_ = values;
+      ++tracked_;
+    }
+    if (mot_body_) mot_body_->check();
+    if (bvh_body_) bvh_body_->check();
+  }
+
+  /// Same, with the row given as "not tracked".
+  void append_untracked(long frame, double time) {
+    append(frame, time, Eigen::VectorXd::Constant(columns(), std::numeric_limits<double>::quiet_NaN()));
+  }
+
+  /// Writes the headers, then renames the three files to their target names. On failure every
+  /// temporary file is removed and std::runtime_error is thrown (targets renamed before the failing
+  /// one stay).
+  void finish() {
+    if (finished_) return;
+    std::optional<AtomicFileWriter> mot, bvh;
+    if (mot_body_) {
+      mot.emplace(paths_.mot);
+      write_opensim_mot_header(mot->stream(), mot_name_, joint_names_, static_cast<std::size_t>(tracked_));
+      mot_body_->copy_to(mot->stream());
+      mot->check();
+    }
+    if (bvh_body_) {
+      bvh.emplace(paths_.bvh);
+      skeleton_.write_hierarchy(bvh->stream());
+      BvhSkeleton::write_motion_header(bvh->stream(), frames_, rate_hz_);
+      bvh_body_->copy_to(bvh->stream());
+      if (tracked_ == 0)  // never tracked: the rest pose throughout
+        for (long r = 0; r < untracked_before_first_; ++r) skeleton_.write_row(bvh->stream(), last_tracked_);
+      bvh->check();
+    }
+    mot_body_.reset();
+    bvh_body_.reset();
+    if (csv_) csv_->commit();
+    if (mot) mot->commit();
+    if (bvh) bvh->commit();
+    finished_ = true;
+  }
+
+ private:
+  /// A scratch file beside a target, removed when destroyed.
+  class ScratchFile {
+   public:
+    explicit ScratchFile(std::string path) : path_(std::move(path)) {
+      stream_.open(path_, std::ios::in | std::ios::out | std::ios::trunc);
+      if (!stream_) throw std::runtime_error("cannot open " + path_ + " for writing");
+    }
+    ScratchFile(const ScratchFile&) = delete;
+    ScratchFile& operator=(const ScratchFile&) = delete;
+    ~ScratchFile() {
+      stream_.close();
+      std::error_code ignored;
+      std::filesystem::remove(path_, ignored);
+    }
+    std::ostream& stream() { return stream_; }
+    void check() const {
+      if (!stream_) throw std::runtime_error("cannot write " + path_ + " (disk full or no permission?)");
+    }
+    /// Appends everything written so far to `out`.
+    void copy_to(std::ostream& out) {
+      stream_.flush();
+      check();
+      stream_.seekg(0);
+      if (stream_.peek() != std::fstream::traits_type::eof()) out << stream_.rdbuf();
+      stream_.clear();
+      check();
+    }
+
+   private:
+    std::string path_;
+    std::fstream stream_;
+  };
+
+  MotionFilePaths paths_;
+  std::vector<std::string> joint_names_;
+  BvhSkeleton skeleton_;
+  double rate_hz_;
+  std::string mot_name_;
+  std::optional<AtomicFileWriter> csv_;
+  std::optional<ScratchFile> mot_body_, bvh_body_;
+  Eigen::VectorXd last_tracked_;  ///< the BVH pose of untracked rows; zero (rest) until one is tracked
+  long frames_ = 0;
+  long tracked_ = 0;
+  long untracked_before_first_ = 0;
+  bool finished_ = false;
+};
+
+}  // namespace s2kf::io
