@@ -10,6 +10,7 @@
 #include <s2kf/io/bvh.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/io/motion_stream_writer.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
@@ -28,6 +29,7 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -70,6 +72,20 @@ std::string format(double value, int precision = 1) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(precision) << value;
   return s.str();
+}
+
+/// The per-frame marker report PREFIX_markers.csv: its header, and one line per frame.
+void write_marker_report_header(std::ostream& out) {
+  out << "frame,time,mean_marker_distance_mm,visible_markers\n";
+}
+void write_marker_report_row(std::ostream& out, long frame, double time, double mean_marker_distance,
+                             int visible_markers) {
+  out << std::setprecision(9) << frame << "," << time << ",";
+  if (std::isfinite(mean_marker_distance))
+    out << mean_marker_distance;
+  else
+    out << "nan";
+  out << "," << visible_markers << "\n";
 }
 
 std::vector<std::string> recording_labels(const c3d::C3dInfo& info) {
@@ -199,29 +215,59 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                 << "/" << info.frame_count << std::flush;
     }
   };
+  // Outputs, each written completely or not at all: without --smooth every row goes to the files as
+  // it is tracked (memory stays constant however long the recording is); the smoother needs every
+  // frame, so with --smooth the table is kept and written after smoothing.
+  const std::string name = fs::path(input).stem().string();
+  io::MotionStreamWriter motion_files({prefix + ".csv", prefix + ".mot", prefix + ".bvh"}, model, info.rate,
+                                      name);
+  io::AtomicFileWriter marker_report(prefix + "_markers.csv");
+  write_marker_report_header(marker_report.stream());
+  std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
+  track::FrameSink sink;
+  if (!smoother)
+    sink = [&](const track::TrackedFrame& f) {
+      motion_files.append(f.frame, f.time, f.values);
+      write_marker_report_row(marker_report.stream(), f.frame, f.time, f.estimate.mean_marker_distance,
+                              f.estimate.visible_markers);
+      if (f.frame == settings.figure_frame && io::is_tracked_row(f.values)) {
+        figure_pose.emplace();
+        figure_pose->root_position = f.values.head<3>();
+        figure_pose->root_rpy = f.values.segment<3>(3);
+        figure_pose->joints = f.values.tail(f.values.size() - 6);
+      }
+    };
   const auto joint_names = model.joint_names();
   track::TrackingRun run =
-      s2kf_tracker ? track::run_tracking(*s2kf_tracker, next_frame, info.rate, joint_names, false, on_frame)
-                   : track::run_tracking(*baseline, next_frame, info.rate, joint_names, false, on_frame);
+      s2kf_tracker
+          ? track::run_tracking(*s2kf_tracker, next_frame, info.rate, joint_names, false, on_frame, sink)
+          : track::run_tracking(*baseline, next_frame, info.rate, joint_names, false, on_frame, sink);
   if (show_progress) std::cerr << "\n";
   if (!bad_coordinates.empty()) throw UserError(bad_coordinates);
   if (run.frames_tracked == 0)
     throw UserError(input + ": no frame has the " + std::to_string(options.min_markers_to_start) +
                     " visible markers needed to start tracking");
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
-  if (smoother) smoother->smooth(run.motion);
+  if (smoother) {
+    smoother->smooth(run.motion);
+    for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {
+      const auto f = static_cast<std::size_t>(r);
+      motion_files.append(run.motion.frame[f], run.motion.time[f], run.motion.values.row(r).transpose());
+      write_marker_report_row(marker_report.stream(), run.motion.frame[f], run.motion.time[f],
+                              run.mean_marker_distance[f], run.visible_markers[f]);
+      if (run.motion.frame[f] == settings.figure_frame &&
+          io::is_tracked_row(run.motion.values.row(r).transpose()))
+        figure_pose = track::pose_of_row(run.motion, r);
+    }
+  }
   std::string figure_file;
   if (settings.figure_frame >= 0) {
     std::string problem;
-    Eigen::Index row = -1;
-    for (std::size_t r = 0; r < run.motion.frame.size(); ++r)
-      if (run.motion.frame[r] == settings.figure_frame) row = static_cast<Eigen::Index>(r);
-    if (row < 0 || !run.motion.values.row(row).allFinite())
+    if (!figure_pose)
       warnings.push_back("frame " + std::to_string(settings.figure_frame) +
                          " was not tracked: no figure drawn");
-    else if (draw_tracked_frame(prefix, settings.figure_frame, model, mapping,
-                                track::pose_of_row(run.motion, row), figure_points.positions,
-                                figure_points.visible, problem))
+    else if (draw_tracked_frame(prefix, settings.figure_frame, model, mapping, *figure_pose,
+                                figure_points.positions, figure_points.visible, problem))
       figure_file = prefix + "_frame" + std::to_string(settings.figure_frame) + ".png";
     else
       warnings.push_back(problem);
@@ -232,26 +278,12 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   // The convergence rule (spec/evaluation.md) restarts at any late frame above 1.5 times the final
   // level, so on long real recordings the mean over every tracked frame is reported as well.
   const double overall = track::mean_from(run.mean_marker_distance, 0);
-  std::vector<double> latency_ms;
-  for (double s : run.seconds) latency_ms.push_back(1000 * s);
+  std::vector<double>& latency_ms = run.seconds;  // not needed in seconds any more
+  for (double& s : latency_ms) s *= 1000;
   const double median_ms = track::quantile(latency_ms, 0.5), p99_ms = track::quantile(latency_ms, 0.99);
 
-  // Outputs, each written completely or not at all.
-  const std::string name = fs::path(input).stem().string();
-  io::save_motion_csv(prefix + ".csv", run.motion);
-  io::save_opensim_mot(prefix + ".mot", run.motion, name);
-  io::save_bvh(prefix + ".bvh", model, run.motion, info.rate);
-  io::write_file_atomically(prefix + "_markers.csv", [&](std::ostream& out) {
-    out << "frame,time,mean_marker_distance_mm,visible_markers\n" << std::setprecision(9);
-    for (std::size_t f = 0; f < run.motion.frame.size(); ++f) {
-      out << run.motion.frame[f] << "," << run.motion.time[f] << ",";
-      if (std::isfinite(run.mean_marker_distance[f]))
-        out << run.mean_marker_distance[f];
-      else
-        out << "nan";
-      out << "," << run.visible_markers[f] << "\n";
-    }
-  });
+  motion_files.finish();
+  marker_report.commit();
   std::vector<std::string> markers_used;
   for (int m = 0; m < model.marker_count(); ++m)
     if (mapping.point_of_marker[m] >= 0) markers_used.push_back(model.markers[m].name);
@@ -264,7 +296,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       {"calibration", calibration_summary},
       {"smoothed", smoother != nullptr},
       {"preset", options.preset},
-      {"frames", run.motion.frame.size()},
+      {"frames", run.frames},
       {"frames_tracked", run.frames_tracked},
       {"rate", info.rate},
       {"height_mm", height},
@@ -284,8 +316,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
 
   std::ostringstream paragraph;
   for (const std::string& message : choice.messages) paragraph << message << "\n";
-  paragraph << name << ": tracked " << run.frames_tracked << " of " << run.motion.frame.size()
-            << " frames at " << format(info.rate, 0) << " Hz with " << markers_used.size() << " markers ("
+  paragraph << name << ": tracked " << run.frames_tracked << " of " << run.frames << " frames at "
+            << format(info.rate, 0) << " Hz with " << markers_used.size() << " markers ("
             << mapping.ignored_labels.size() << " labels ignored), body height " << format(height, 0)
             << " mm (" << height_source << "), marker set " << choice.set.name;
   if (calibrate)

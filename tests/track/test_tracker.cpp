@@ -341,6 +341,28 @@ TEST(TrackCommand, AgreesWithTheLibraryAndWritesFilesThatParse) {
   std::ifstream markers(out.string() + "_markers.csv");
   std::getline(markers, line);
   EXPECT_EQ(line, "frame,time,mean_marker_distance_mm,visible_markers");
+
+  // The program streams its outputs; they are byte for byte what the batch writers make of the
+  // library's run (the same model and frames, so the same numbers).
+  const fs::path batch = scratch("cli") / "hs_batch";
+  io::save_motion_csv(batch.string() + ".csv", lib.run.motion);
+  io::save_opensim_mot(batch.string() + ".mot", lib.run.motion, "handstand");
+  io::save_bvh(batch.string() + ".bvh", lib.model, lib.run.motion, recording.info.rate);
+  for (const char* ext : {".csv", ".mot", ".bvh"})
+    EXPECT_TRUE(read_text(out.string() + ext) == read_text(batch.string() + ext)) << ext << " differs";
+  std::ostringstream report;  // the marker report as the program wrote it before it streamed
+  report << "frame,time,mean_marker_distance_mm,visible_markers\n" << std::setprecision(9);
+  for (std::size_t f = 0; f < lib.run.motion.frame.size(); ++f) {
+    report << lib.run.motion.frame[f] << "," << lib.run.motion.time[f] << ",";
+    if (std::isfinite(lib.run.mean_marker_distance[f]))
+      report << lib.run.mean_marker_distance[f];
+    else
+      report << "nan";
+    report << "," << lib.run.visible_markers[f] << "\n";
+  }
+  EXPECT_TRUE(read_text(out.string() + "_markers.csv") == report.str()) << "_markers.csv differs";
+  for (const auto& entry : fs::directory_iterator(out.parent_path()))
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
 }
 
 TEST(TrackCommand, BadInputGivesASentenceAndNonZeroExit) {
@@ -650,6 +672,84 @@ TEST(MotionStreamWriter, AnAbandonedWriterLeavesNoTargetAndNoTemporary) {
   writer.finish();
   EXPECT_EQ(file_names(dir), (std::vector<std::string>{"x.bvh", "x.csv", "x.mot"}));
   EXPECT_NE(read_text((dir / "x.csv").string()), "an earlier result\n");
+}
+
+// The bundled handstand's frames repeated from its start up to `frames` frames, as a C3D file in
+// `dir`; edit(f, positions) may change frame f.
+std::string repeated_handstand(const fs::path& dir, const std::string& name, long frames,
+                               const std::function<void(long, Eigen::Matrix3Xd&)>& edit = {}) {
+  const c3d::Recording handstand = c3d::read_c3d(data("handstand.c3d"));
+  std::vector<std::string> labels;
+  for (const auto& label : handstand.info.labels) labels.push_back(label.raw);
+  const std::string path = (dir / (name + ".c3d")).string();
+  c3d::C3dStreamWriter writer(path, labels, handstand.info.rate);
+  for (long f = 0; f < frames; ++f) {
+    Eigen::Matrix3Xd positions = handstand.frame(f % handstand.frame_count());
+    if (edit) edit(f, positions);
+    writer.append(positions, handstand.visible.col(f % handstand.frame_count()));
+  }
+  writer.finish();
+  return path;
+}
+
+TEST(TrackCommand, BadCoordinatesMidFileLeaveNoOutputAndNoTemporary) {
+  const fs::path dir = empty_scratch("stream_bad");
+  const std::string input = repeated_handstand(dir, "bad", 400, [](long f, Eigen::Matrix3Xd& positions) {
+    if (f == 300) positions(0, 3) = 2e6;  // 2 km
+  });
+  const CommandResult r = run_command("track " + input + " --no-calibrate --height 1750 --samples 93 --out " +
+                                      (dir / "out" / "bad").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("frame 300"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("beyond a kilometre"), std::string::npos) << r.output;
+  EXPECT_TRUE(file_names(dir / "out").empty());
+}
+
+// Runs the s2kf program (no shell, output discarded); its exit status and peak resident set size
+// (kB) as wait4() reports them for that one child.
+std::pair<int, long> run_for_peak_memory(const std::vector<std::string>& arguments) {
+  std::vector<std::string> words{S2KF_CLI};
+  words.insert(words.end(), arguments.begin(), arguments.end());
+  std::vector<char*> argv;
+  for (std::string& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+  const pid_t child = fork();
+  if (child == 0) {
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, STDOUT_FILENO);
+    dup2(null, STDERR_FILENO);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  if (child < 0 || wait4(child, &status, 0, &usage) != child) return {-1, 0};
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, usage.ru_maxrss};
+}
+
+TEST(TrackCommand, MemoryDoesNotGrowWithTheLengthOfTheRecording) {
+#if defined(S2KF_TEST_UNDER_ASAN)
+  GTEST_SKIP() << "AddressSanitizer's shadow memory and quarantine make resident set sizes meaningless";
+#else
+  // 6000 more frames: the motion table kept in memory grew by about 780 bytes a frame (4.5 MB here);
+  // streamed, only the 16 bytes a frame of the summary's series remain (0.1 MB).
+  const fs::path dir = empty_scratch("stream_memory");
+  const std::string short_input = repeated_handstand(dir, "short", 675);
+  const std::string long_input = repeated_handstand(dir, "long", 6675);
+  const auto track = [&](const std::string& input, const std::string& name) {
+    return run_for_peak_memory(
+        {"track", input, "--no-calibrate", "--samples", "93", "--quiet", "--out", (dir / name).string()});
+  };
+  const auto [short_status, short_kb] = track(short_input, "short");  // first: it may fill the sample cache
+  const auto [long_status, long_kb] = track(long_input, "long");
+  ASSERT_EQ(short_status, 0);
+  ASSERT_EQ(long_status, 0);
+  EXPECT_GT(short_kb, 0);
+  EXPECT_LT(long_kb - short_kb, 1536)
+      << "peak RSS " << short_kb << " kB for 675 frames, " << long_kb << " kB for 6675 frames";
+  EXPECT_EQ(std::count(std::istreambuf_iterator<char>(std::ifstream(dir / "long.csv").rdbuf()), {}, '\n'),
+            6676);
+#endif
 }
 
 }  // namespace
