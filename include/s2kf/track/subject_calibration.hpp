@@ -1,7 +1,10 @@
 /// @file
 /// Subject calibration: estimating where a subject's markers sit on the segments and how long the
-/// subject's bones are, from a recording of that subject, by alternating pose and subject
-/// estimation (coordinate descent on the batch least-squares problem over all frames).
+/// subject's bones are, from a recording of that subject. The S2KF tracks the recording once to
+/// give every frame a starting pose; a bundle adjustment then solves for all poses and the subject
+/// together (Levenberg-Marquardt on the batch least-squares problem, the poses eliminated frame by
+/// frame through the Schur complement), with priors that keep offsets near the marker set and bone
+/// lengths near the model's.
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
@@ -14,6 +17,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -25,18 +29,27 @@
 namespace s2kf::track {
 
 struct CalibrationOptions {
-  int iterations = 3;                   ///< pose/subject alternations
+  /// Rounds of (track the recording with the current model, then bundle-adjust poses and subject).
+  /// A second round re-tracks with the calibrated model and re-selects the outliers.
+  int iterations = 2;
+  /// Levenberg-Marquardt iterations per bundle adjustment at most; it stops earlier when an
+  /// accepted step lowers the cost by less than `relative_tolerance` of it.
+  int bundle_iterations = 40;
+  double relative_tolerance = 1e-5;
   bool estimate_segment_scales = true;  ///< re-estimate bone lengths too (else offsets only)
-  /// The prior that keeps offsets near the marker set: worth this many frames of data, so a
-  /// marker seen in n frames moves by n / (n + k) of what its residuals alone ask for.
-  double offset_prior_frames = 20.0;
-  /// Relative SD of a segment's length factor around the start, as a prior counted once per frame
-  /// used (so it keeps its weight against the data however long the recording): bone lengths and
-  /// marker offsets along the bone trade against each other, and a weak prior lets them drift.
-  double scale_prior_sd = 0.03;
+  /// SD (mm, per coordinate) of a marker's placement around the marker set's offset: a Gaussian
+  /// prior in the same units as the marker residuals over the tracker's marker noise. It decides
+  /// the directions the data cannot see (an end segment's markers turned about its 3-DoF joint,
+  /// which a constant joint-angle offset undoes) and barely moves the ones it sees.
+  double offset_prior_sd_mm = 15.0;
+  /// SD of a segment's length factor around 1, counted once per frame used (a Gaussian prior in
+  /// the same units as the marker residuals over the tracker's marker noise). Over n frames it is
+  /// an SD of 0.4 / sqrt(n) (2.3 % at 300 frames): it decides the lengths no marker observes, such
+  /// as the upper neck's, and barely touches the well observed ones, whose data grow as fast.
+  double scale_prior_sd_per_frame = 0.4;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
-  int stride = 2;         ///< every stride-th tracked frame enters the least squares
-  /// A residual beyond max(outlier_floor_mm, 4 x the pass's median residual) is left out
+  int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
+  /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
   /// (swapped or ghost markers in real recordings).
   double outlier_floor_mm = 30.0;
   /// Per model marker relative weight (e.g. the marker set's `weight` over its noise squared,
@@ -46,20 +59,27 @@ struct CalibrationOptions {
 
   void validate() const {
     if (iterations < 1) throw std::invalid_argument("calibration: at least 1 iteration is needed");
-    if (!(offset_prior_frames >= 0))
-      throw std::invalid_argument("calibration: the offset prior must be >= 0");
-    if (!(scale_prior_sd > 0))
+    if (bundle_iterations < 1)
+      throw std::invalid_argument("calibration: at least 1 bundle-adjustment iteration is needed");
+    if (!(offset_prior_sd_mm > 0))
+      throw std::invalid_argument("calibration: the offset prior SD must be positive");
+    if (!(scale_prior_sd_per_frame > 0))
       throw std::invalid_argument("calibration: the scale prior SD must be positive");
     if (skip_frames < 0 || stride < 1)
       throw std::invalid_argument("calibration: skip_frames >= 0 and stride >= 1");
   }
 };
 
-/// One tracking pass over the recording with the model of that moment.
+/// One round: a tracking pass over the recording with the model of that moment, then (except for
+/// the final pass) the bundle adjustment that starts from its poses.
 struct CalibrationPass {
-  double mean_marker_distance_mm = 0;  ///< mean over the frames from skip_frames after the start on
-  long frames_used = 0;                ///< frames that entered the least squares (0 for the final pass)
+  double mean_marker_distance_mm = 0;  ///< tracking: mean over the frames from skip_frames after the start on
+  long frames_used = 0;                ///< frames that entered the bundle adjustment (0 for the final pass)
   long residuals_rejected = 0;         ///< marker residuals left out as outliers
+  int bundle_iterations = 0;           ///< Levenberg-Marquardt iterations taken
+  /// RMS marker distance (mm) over the adjusted frames' inlier residuals, before and after the
+  /// bundle adjustment.
+  double rms_before_mm = 0, rms_after_mm = 0;
 };
 
 struct SubjectCalibration {
@@ -84,21 +104,25 @@ inline std::vector<std::string> scalable_segments(const body::BodyModel& model) 
   return segments;
 }
 
-struct TrackedFrame {
+/// A frame of the bundle adjustment: its pose and the markers (indices into `used`) it fits.
+struct BundleFrame {
   long index = 0;
-  body::Pose pose;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::VectorXd joints;
+  std::vector<int> markers;
 };
 
 /// Tracks all frames; returns the poses of the frames usable for calibration and the pass's mean
 /// marker distance after convergence.
-inline std::vector<TrackedFrame> track_pass(const body::BodyModel& model, const MarkerMapping& mapping,
-                                            const TrackerOptions& tracker_options, double rate_hz,
-                                            const std::vector<Eigen::Matrix3Xd>& points,
-                                            const std::vector<Eigen::Array<bool, Eigen::Dynamic, 1>>& visible,
-                                            const CalibrationOptions& options, double& mean_distance) {
+inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const MarkerMapping& mapping,
+                                           const TrackerOptions& tracker_options, double rate_hz,
+                                           const std::vector<Eigen::Matrix3Xd>& points,
+                                           const std::vector<Eigen::Array<bool, Eigen::Dynamic, 1>>& visible,
+                                           const CalibrationOptions& options, double& mean_distance) {
   Tracker tracker(model, mapping, tracker_options, rate_hz);
   std::vector<double> distance;
-  std::vector<TrackedFrame> frames;
+  std::vector<BundleFrame> frames;
   long started = -1;
   for (std::size_t f = 0; f < points.size(); ++f) {
     const FrameEstimate& estimate = tracker.process(points[f], visible[f]);
@@ -106,8 +130,14 @@ inline std::vector<TrackedFrame> track_pass(const body::BodyModel& model, const 
     if (!estimate.tracked) continue;
     if (started < 0) started = static_cast<long>(f);
     const long since = static_cast<long>(f) - started;
-    if (since >= options.skip_frames && since % options.stride == 0 && estimate.status == FilterStatus::ok)
-      frames.push_back({static_cast<long>(f), estimate.pose});
+    if (since >= options.skip_frames && since % options.stride == 0 && estimate.status == FilterStatus::ok) {
+      BundleFrame frame;
+      frame.index = static_cast<long>(f);
+      frame.position = estimate.pose.root_position;
+      frame.rotation = estimate.root_rotation;
+      frame.joints = estimate.pose.joints;
+      frames.push_back(std::move(frame));
+    }
   }
   // Mean over the frames after the convergence allowance (a late spike must not empty the window,
   // as it can with converged_frame).
@@ -115,15 +145,280 @@ inline std::vector<TrackedFrame> track_pass(const body::BodyModel& model, const 
   return frames;
 }
 
+/// The bundle adjustment's subject unknowns, [length factors (one per scalable segment), offsets
+/// (3 per used marker)], and their priors. Length factors multiply the bone translations of the
+/// current model (a step s makes them (1 + s) times longer); `cumulative` is their product since
+/// the start, which the prior pulls towards 1.
+class BundleAdjustment {
+ public:
+  BundleAdjustment(const body::BodyModel& start, const MarkerMapping& mapping,
+                   const std::vector<Eigen::Matrix3Xd>& points, const CalibrationOptions& options,
+                   double noise_variance)
+      : start_(start), mapping_(mapping), points_(points), options_(options) {
+    segments_ = options.estimate_segment_scales ? scalable_segments(start) : std::vector<std::string>{};
+    cumulative_.assign(segments_.size(), 1.0);
+    for (int m = 0; m < start.marker_count(); ++m)
+      if (mapping.point_of_marker[static_cast<std::size_t>(m)] >= 0) used_.push_back(m);
+    scales_ = static_cast<int>(segments_.size());
+    unknowns_ = scales_ + 3 * static_cast<int>(used_.size());
+    joint_scale_.assign(static_cast<std::size_t>(start.joint_count()), -1);
+    for (int j = 0; j < start.joint_count(); ++j) {
+      const std::string segment =
+          body::segment_of_frame(start, start.joints[static_cast<std::size_t>(j)].parent_frame);
+      const auto found = std::find(segments_.begin(), segments_.end(), segment);
+      if (found != segments_.end())
+        joint_scale_[static_cast<std::size_t>(j)] = static_cast<int>(found - segments_.begin());
+    }
+    for (int m : used_) {
+      const double w =
+          options.marker_weight.empty() ? 1.0 : options.marker_weight[static_cast<std::size_t>(m)];
+      weight_.push_back(w / noise_variance);
+      offset_prior_.push_back(1.0 / (options.offset_prior_sd_mm * options.offset_prior_sd_mm));
+    }
+  }
+
+  const std::vector<int>& used() const { return used_; }
+  const std::vector<std::string>& segments() const { return segments_; }
+  const std::vector<double>& cumulative() const { return cumulative_; }
+
+  /// Adjusts `model` and the frames' poses in place; fills the pass's iteration count and RMS.
+  void adjust(body::BodyModel& model, std::vector<BundleFrame>& frames, CalibrationPass& pass) {
+    // The length prior grows with the frames like the data: soft-tissue bias grows with them
+    // too, and would otherwise carry the weakly observed lengths (lumbar, trunk) far off.
+    scale_weight_ = static_cast<double>(frames.size()) /
+                    (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
+    const double before = cost(model, frames, cumulative_);
+    long residuals = 0;
+    for (const BundleFrame& frame : frames) residuals += static_cast<long>(frame.markers.size());
+    const auto rms = [&](const body::BodyModel& m, const std::vector<BundleFrame>& f) {
+      double sum = 0;
+      for (const BundleFrame& frame : f) sum += frame_residual_sum(m, frame, false);
+      return std::sqrt(sum / static_cast<double>(std::max(residuals, 1L)));
+    };
+    pass.rms_before_mm = rms(model, frames);
+    double current = before, damping = 1e-4;
+    for (int it = 0; it < options_.bundle_iterations; ++it) {
+      ++pass.bundle_iterations;
+      bool accepted = false;
+      for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
+        body::BodyModel trial_model = model;
+        std::vector<BundleFrame> trial_frames = frames;
+        std::vector<double> trial_cumulative = cumulative_;
+        if (!step(model, frames, damping, trial_model, trial_frames, trial_cumulative)) {
+          damping *= 10;
+          continue;
+        }
+        const double trial = cost(trial_model, trial_frames, trial_cumulative);
+        if (trial < current) {
+          accepted = true;
+          const double decrease = current - trial;
+          model = std::move(trial_model);
+          frames = std::move(trial_frames);
+          cumulative_ = std::move(trial_cumulative);
+          current = trial;
+          damping = std::max(damping / 10, 1e-9);
+          if (decrease <= options_.relative_tolerance * current) it = options_.bundle_iterations;
+        } else {
+          damping = std::max(damping * 10, 1e-4);
+        }
+      }
+      if (!accepted) break;  // no step lowers the cost: converged as far as the arithmetic allows
+    }
+    pass.rms_after_mm = rms(model, frames);
+  }
+
+ private:
+  static constexpr int kRoot = 6;
+
+  /// Sum of weighted squared residuals of one frame's markers (or unweighted, squared mm).
+  double frame_residual_sum(const body::BodyModel& model, const BundleFrame& frame, bool weighted) const {
+    const body::FrameTransforms tf = body::joint_frames(model, frame.position, frame.rotation, frame.joints);
+    const Eigen::Matrix3Xd& y = points_[static_cast<std::size_t>(frame.index)];
+    double sum = 0;
+    for (int u : frame.markers) {
+      const int m = used_[static_cast<std::size_t>(u)];
+      const body::Marker& marker = model.markers[static_cast<std::size_t>(m)];
+      const Eigen::Vector3d p = tf.origins[static_cast<std::size_t>(marker.frame)] +
+                                tf.rotations[static_cast<std::size_t>(marker.frame)] * marker.offset;
+      const double r2 = (y.col(mapping_.point_of_marker[static_cast<std::size_t>(m)]) - p).squaredNorm();
+      sum += weighted ? weight_[static_cast<std::size_t>(u)] * r2 : r2;
+    }
+    return sum;
+  }
+
+  /// The objective: weighted data residuals plus both priors.
+  double cost(const body::BodyModel& model, const std::vector<BundleFrame>& frames,
+              const std::vector<double>& cumulative) const {
+    double sum = 0;
+    for (const BundleFrame& frame : frames) sum += frame_residual_sum(model, frame, true);
+    for (std::size_t u = 0; u < used_.size(); ++u) {
+      const std::size_t m = static_cast<std::size_t>(used_[u]);
+      sum += offset_prior_[u] * (model.markers[m].offset - start_.markers[m].offset).squaredNorm();
+    }
+    for (double c : cumulative) sum += scale_weight_ * (c - 1) * (c - 1);
+    return sum;
+  }
+
+  /// One frame's normal equations: A (pose x pose), B (pose x subject), the pose gradient g, and
+  /// the frame's share of the subject block C and gradient h (added to them). Pose columns are
+  /// [root position, rotation vector on the right of the root rotation, joints].
+  void linearise(const body::BodyModel& model, const BundleFrame& frame, Eigen::MatrixXd& A,
+                 Eigen::MatrixXd& B, Eigen::VectorXd& g, Eigen::MatrixXd& C, Eigen::VectorXd& h) const {
+    const int n = kRoot + model.joint_count();
+    A.setZero(n, n);
+    B.setZero(n, unknowns_);
+    g.setZero(n);
+    const body::FrameTransforms tf = body::joint_frames(model, frame.position, frame.rotation, frame.joints);
+    const Eigen::Matrix3Xd& y = points_[static_cast<std::size_t>(frame.index)];
+    Eigen::Matrix<double, 3, Eigen::Dynamic> jq(3, n), js(3, scales_);
+    for (int u : frame.markers) {
+      const int m = used_[static_cast<std::size_t>(u)];
+      const double w = weight_[static_cast<std::size_t>(u)];
+      const body::Marker& marker = model.markers[static_cast<std::size_t>(m)];
+      const auto mf = static_cast<std::size_t>(marker.frame);
+      const Eigen::Vector3d p = tf.origins[mf] + tf.rotations[mf] * marker.offset;
+      const Eigen::Vector3d r = y.col(mapping_.point_of_marker[static_cast<std::size_t>(m)]) - p;
+      jq.setZero();
+      js.setZero();
+      jq.leftCols<3>().setIdentity();
+      const Eigen::Vector3d arm = p - frame.position;
+      for (int k = 0; k < 3; ++k) jq.col(3 + k) = frame.rotation.col(k).cross(arm);  // R <- R Exp(omega)
+      for (int f = marker.frame; f > 0; f = model.joints[static_cast<std::size_t>(f - 1)].parent_frame) {
+        const body::Joint& joint = model.joints[static_cast<std::size_t>(f - 1)];
+        const auto fs = static_cast<std::size_t>(f);
+        jq.col(kRoot + f - 1) = tf.rotations[fs].col(static_cast<int>(joint.axis)).cross(p - tf.origins[fs]);
+        const int s = joint_scale_[static_cast<std::size_t>(f - 1)];
+        if (s >= 0)
+          js.col(s) += tf.rotations[static_cast<std::size_t>(joint.parent_frame)] * joint.translation;
+      }
+      const Eigen::Matrix3d& ro = tf.rotations[mf];  // d p / d offset
+      const int at = scales_ + 3 * u;
+      A.noalias() += w * jq.transpose() * jq;
+      g.noalias() += w * jq.transpose() * r;
+      B.middleCols<3>(at).noalias() += w * jq.transpose() * ro;
+      h.segment<3>(at).noalias() += w * ro.transpose() * r;
+      C.block<3, 3>(at, at).diagonal().array() += w;
+      if (scales_ > 0) {
+        B.leftCols(scales_).noalias() += w * jq.transpose() * js;
+        C.topLeftCorner(scales_, scales_).noalias() += w * js.transpose() * js;
+        C.block(0, at, scales_, 3).noalias() += w * js.transpose() * ro;
+        C.block(at, 0, 3, scales_).noalias() += w * ro.transpose() * js;
+        h.head(scales_).noalias() += w * js.transpose() * r;
+      }
+    }
+    // Active set: a joint on a limit that the gradient pushes further out stays there for this
+    // step (clamping a free step afterwards would spoil the rest of it).
+    for (int j = 0; j < model.joint_count(); ++j) {
+      const double q = frame.joints(j), gj = g(kRoot + j);
+      const body::Joint& joint = model.joints[static_cast<std::size_t>(j)];
+      if ((q <= joint.lower && gj < 0) || (q >= joint.upper && gj > 0)) {
+        A.row(kRoot + j).setZero();
+        A.col(kRoot + j).setZero();
+        A(kRoot + j, kRoot + j) = 1;
+        B.row(kRoot + j).setZero();
+        g(kRoot + j) = 0;
+      }
+    }
+  }
+
+  /// A's Levenberg-Marquardt damping: relative to its diagonal, with a floor that keeps the
+  /// directions no marker sees (exactly redundant spine and neck pairs, joints of hidden
+  /// segments) solvable without moving them.
+  static void damp(Eigen::MatrixXd& A, double damping) {
+    const double floor = 1e-9 * std::max(A.diagonal().maxCoeff(), 1e-12);
+    A.diagonal() += (damping * A.diagonal().array() + floor).matrix();
+  }
+
+  /// One damped Gauss-Newton step from (model, frames): the subject step from the reduced
+  /// (Schur complement) system, then each frame's pose step. False if a system is not solvable.
+  bool step(const body::BodyModel& model, const std::vector<BundleFrame>& frames, double damping,
+            body::BodyModel& trial_model, std::vector<BundleFrame>& trial_frames,
+            std::vector<double>& trial_cumulative) const {
+    Eigen::MatrixXd C = Eigen::MatrixXd::Zero(unknowns_, unknowns_), reduced;
+    Eigen::VectorXd h = Eigen::VectorXd::Zero(unknowns_);
+    Eigen::MatrixXd A, B, X;
+    Eigen::VectorXd g;
+    reduced = Eigen::MatrixXd::Zero(unknowns_, unknowns_);
+    Eigen::VectorXd reduced_rhs = Eigen::VectorXd::Zero(unknowns_);
+    for (const BundleFrame& frame : frames) {
+      linearise(model, frame, A, B, g, C, h);
+      damp(A, damping);
+      const Eigen::LLT<Eigen::MatrixXd> factor(A);
+      if (factor.info() != Eigen::Success) return false;
+      X = factor.matrixL().solve(B);  // L^-1 B
+      const Eigen::VectorXd z = factor.matrixL().solve(g);
+      reduced.selfadjointView<Eigen::Lower>().rankUpdate(X.transpose(), -1.0);
+      reduced_rhs.noalias() -= X.transpose() * z;
+    }
+    // Priors (offsets towards the start, length factors towards 1), then the damping.
+    for (std::size_t u = 0; u < used_.size(); ++u) {
+      const std::size_t m = static_cast<std::size_t>(used_[u]);
+      const int at = scales_ + 3 * static_cast<int>(u);
+      C.block<3, 3>(at, at).diagonal().array() += offset_prior_[u];
+      h.segment<3>(at) -= offset_prior_[u] * (model.markers[m].offset - start_.markers[m].offset);
+    }
+    const double scale_weight = scale_weight_;
+    for (int s = 0; s < scales_; ++s) {
+      const double c = cumulative_[static_cast<std::size_t>(s)];
+      C(s, s) += scale_weight * c * c;
+      h(s) -= scale_weight * c * (c - 1.0);
+    }
+    damp(C, damping);
+    reduced.triangularView<Eigen::Lower>() += C;
+    reduced_rhs += h;
+    const Eigen::LDLT<Eigen::MatrixXd> reduced_factor(reduced);  // reads the lower triangle
+    const Eigen::VectorXd subject_step = reduced_factor.solve(reduced_rhs);
+    if (reduced_factor.info() != Eigen::Success || !subject_step.allFinite()) return false;
+
+    // Back-substitution: each frame's pose step given the subject step.
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      linearise(model, frames[k], A, B, g, C, h);
+      damp(A, damping);
+      const Eigen::VectorXd pose_step = A.llt().solve(g - B * subject_step);
+      if (!pose_step.allFinite()) return false;
+      BundleFrame& frame = trial_frames[k];
+      frame.position += pose_step.head<3>();
+      const Eigen::Vector3d omega = pose_step.segment<3>(3);
+      if (omega.norm() > 0)
+        frame.rotation =
+            frame.rotation * Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix();
+      for (int j = 0; j < model.joint_count(); ++j)
+        frame.joints(j) = std::clamp(frame.joints(j) + pose_step(kRoot + j),
+                                     model.joints[static_cast<std::size_t>(j)].lower,
+                                     model.joints[static_cast<std::size_t>(j)].upper);
+    }
+    for (int j = 0; j < trial_model.joint_count(); ++j) {
+      const int s = joint_scale_[static_cast<std::size_t>(j)];
+      if (s >= 0) trial_model.joints[static_cast<std::size_t>(j)].translation *= 1.0 + subject_step(s);
+    }
+    for (int s = 0; s < scales_; ++s) trial_cumulative[static_cast<std::size_t>(s)] *= 1.0 + subject_step(s);
+    for (std::size_t u = 0; u < used_.size(); ++u)
+      trial_model.markers[static_cast<std::size_t>(used_[u])].offset +=
+          subject_step.segment<3>(scales_ + 3 * static_cast<int>(u));
+    return true;
+  }
+
+  const body::BodyModel& start_;
+  const MarkerMapping& mapping_;
+  const std::vector<Eigen::Matrix3Xd>& points_;
+  const CalibrationOptions& options_;
+  std::vector<std::string> segments_;
+  std::vector<double> cumulative_;
+  std::vector<int> used_;
+  std::vector<int> joint_scale_;
+  std::vector<double> weight_, offset_prior_;
+  int scales_ = 0, unknowns_ = 0;
+  double scale_weight_ = 0;
+};
+
 }  // namespace detail
 
 /// Calibrates `model` (a base model after apply_marker_set, scaled to the subject's height) on a
 /// recording: points[f] (3 x P, mm) and visible[f] per frame, `mapping` from recording points to
-/// model markers. Each iteration tracks the recording with the current model, then, with those
-/// poses fixed, solves the linear least-squares problem in (bone-length factors, marker offsets,
-/// one translation per frame) with priors towards the starting model; marker positions are linear
-/// in all three when the rotations are fixed, so this is exact Gauss-Newton for that block.
-/// Markers the recording never shows keep their offsets. Joint limits are not touched.
+/// model markers. Each round tracks the recording with the current model, keeps every stride-th
+/// frame's pose, leaves out outlying residuals, and bundle-adjusts those poses together with the
+/// bone-length factors and marker offsets. Markers the recording never shows keep their offsets.
+/// Joint limits are not touched, and the adjusted poses stay inside them.
 inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerMapping& mapping,
                                             const TrackerOptions& tracker_options, double rate_hz,
                                             const std::vector<Eigen::Matrix3Xd>& points,
@@ -143,30 +438,15 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
   const body::BodyModel start = model;
   SubjectCalibration result;
   result.model = model;
-  const std::vector<std::string> segments =
-      options.estimate_segment_scales ? detail::scalable_segments(model) : std::vector<std::string>{};
-  std::vector<double> cumulative(segments.size(), 1.0);
-  std::vector<int> used;  // model markers with a recording point
-  for (int m = 0; m < model.marker_count(); ++m)
-    if (mapping.point_of_marker[static_cast<std::size_t>(m)] >= 0) used.push_back(m);
-  const int scale_count = static_cast<int>(segments.size());
-  const int unknowns = scale_count + 3 * static_cast<int>(used.size());
-  // Which scale each joint's translation belongs to (-1: none).
-  std::vector<int> joint_scale(static_cast<std::size_t>(model.joint_count()), -1);
-  for (int j = 0; j < model.joint_count(); ++j) {
-    const std::string segment =
-        body::segment_of_frame(model, model.joints[static_cast<std::size_t>(j)].parent_frame);
-    const auto found = std::find(segments.begin(), segments.end(), segment);
-    if (found != segments.end())
-      joint_scale[static_cast<std::size_t>(j)] = static_cast<int>(found - segments.begin());
-  }
   const double noise_variance = tracker_options.marker_noise_mm * tracker_options.marker_noise_mm;
+  detail::BundleAdjustment adjustment(start, mapping, points, options, noise_variance);
+  const std::vector<int>& used = adjustment.used();
 
-  for (int iteration = 0; iteration <= options.iterations; ++iteration) {
-    const bool last = iteration == options.iterations;
+  for (int round = 0; round <= options.iterations; ++round) {
+    const bool last = round == options.iterations;
     if (last && !options.final_pass) break;
     CalibrationPass pass;
-    const std::vector<detail::TrackedFrame> frames =
+    std::vector<detail::BundleFrame> frames =
         detail::track_pass(result.model, mapping, tracker_options, rate_hz, points, visible, options,
                            pass.mean_marker_distance_mm);
     if (last) {
@@ -174,130 +454,43 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
       break;
     }
     if (frames.empty()) throw std::invalid_argument("calibration: no frame could be tracked");
-    const body::BodyModel& current = result.model;
 
-    // Residuals of every used marker in every frame, for the outlier threshold.
-    std::vector<Eigen::Matrix3Xd> residuals;
-    std::vector<body::FrameTransforms> transforms;
-    std::vector<double> norms;
-    for (const detail::TrackedFrame& frame : frames) {
-      transforms.push_back(body::joint_frames(current, frame.pose));
-      const Eigen::Matrix3Xd predicted = body::marker_positions(current, transforms.back());
-      Eigen::Matrix3Xd r = Eigen::Matrix3Xd::Constant(3, static_cast<Eigen::Index>(used.size()),
-                                                      std::numeric_limits<double>::quiet_NaN());
+    // Inliers: observed residuals at the tracked poses within max(floor, 4 x median).
+    std::vector<std::vector<double>> distances(frames.size());
+    std::vector<double> all;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      const detail::BundleFrame& frame = frames[k];
+      const auto f = static_cast<std::size_t>(frame.index);
+      const Eigen::Matrix3Xd predicted = body::marker_positions(
+          result.model, body::joint_frames(result.model, frame.position, frame.rotation, frame.joints));
+      distances[k].assign(used.size(), -1.0);
       for (std::size_t u = 0; u < used.size(); ++u) {
         const int point = mapping.point_of_marker[static_cast<std::size_t>(used[u])];
-        const auto& y = points[static_cast<std::size_t>(frame.index)];
-        if (point >= y.cols() || !visible[static_cast<std::size_t>(frame.index)](point) ||
-            !y.col(point).allFinite())
-          continue;
-        r.col(static_cast<Eigen::Index>(u)) = y.col(point) - predicted.col(used[u]);
-        norms.push_back(r.col(static_cast<Eigen::Index>(u)).norm());
+        if (point >= points[f].cols() || !visible[f](point) || !points[f].col(point).allFinite()) continue;
+        distances[k][u] = (points[f].col(point) - predicted.col(used[u])).norm();
+        all.push_back(distances[k][u]);
       }
-      residuals.push_back(r);
     }
-    const double threshold = std::max(options.outlier_floor_mm, 4.0 * quantile(norms, 0.5));
-
-    // Normal equations of the weighted residuals with each frame's translation eliminated in
-    // closed form: sum w (a - mean a)^T (a - mean a) = sum w a^T a - (sum w a)^T (sum w a) / sum w,
-    // accumulated block by block (a marker's rows touch the scales and its own offset only).
-    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(unknowns, unknowns);
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(unknowns);
-    Eigen::MatrixXd sum_a(3, unknowns);
-    Eigen::Matrix3Xd a_scale(3, scale_count);
+    const double threshold = std::max(options.outlier_floor_mm, 4.0 * quantile(all, 0.5));
+    std::vector<detail::BundleFrame> kept;
     for (std::size_t k = 0; k < frames.size(); ++k) {
-      const body::FrameTransforms& tf = transforms[k];
-      // A frame's translation can only be separated from the subject with 3 or more markers.
-      int usable = 0;
       for (std::size_t u = 0; u < used.size(); ++u) {
-        const auto r = residuals[k].col(static_cast<Eigen::Index>(u));
-        usable += r.allFinite() && r.norm() <= threshold;
-      }
-      if (usable < 3) continue;
-      sum_a.setZero();
-      Eigen::Vector3d sum_r = Eigen::Vector3d::Zero();
-      double sum_w = 0;
-      int count = 0;
-      for (std::size_t u = 0; u < used.size(); ++u) {
-        const Eigen::Vector3d r = residuals[k].col(static_cast<Eigen::Index>(u));
-        if (!r.allFinite()) continue;
-        if (r.norm() > threshold) {
+        if (distances[k][u] < 0) continue;
+        if (distances[k][u] > threshold)
           ++pass.residuals_rejected;
-          continue;
-        }
-        const int m = used[u];
-        const double w =
-            (options.marker_weight.empty() ? 1.0 : options.marker_weight[static_cast<std::size_t>(m)]) /
-            noise_variance;
-        if (!(w > 0)) continue;
-        const int marker_frame = current.markers[static_cast<std::size_t>(m)].frame;
-        // d(marker)/d(factor s) = sum of R_parent t_j over the bones of segment s on the chain.
-        a_scale.setZero();
-        for (int f = marker_frame; f > 0; f = current.joints[static_cast<std::size_t>(f - 1)].parent_frame) {
-          const int s = joint_scale[static_cast<std::size_t>(f - 1)];
-          if (s < 0) continue;
-          const body::Joint& joint = current.joints[static_cast<std::size_t>(f - 1)];
-          a_scale.col(s) += tf.rotations[static_cast<std::size_t>(joint.parent_frame)] * joint.translation;
-        }
-        const Eigen::Matrix3d rotation = tf.rotations[static_cast<std::size_t>(marker_frame)];
-        const int at = scale_count + 3 * static_cast<int>(u);
-        if (scale_count > 0) {
-          normal.topLeftCorner(scale_count, scale_count).noalias() += w * a_scale.transpose() * a_scale;
-          normal.block(0, at, scale_count, 3).noalias() += w * a_scale.transpose() * rotation;
-          rhs.head(scale_count).noalias() += w * a_scale.transpose() * r;
-          sum_a.leftCols(scale_count) += w * a_scale;
-        }
-        normal.block<3, 3>(at, at).diagonal().array() += w;  // R^T R = I
-        rhs.segment<3>(at).noalias() += w * rotation.transpose() * r;
-        sum_a.middleCols<3>(at) += w * rotation;
-        sum_r += w * r;
-        sum_w += w;
-        ++count;
+        else
+          frames[k].markers.push_back(static_cast<int>(u));
       }
-      if (count == 0 || !(sum_w > 0)) continue;
-      ++pass.frames_used;
-      normal.noalias() -= sum_a.transpose() * sum_a / sum_w;
-      rhs.noalias() -= sum_a.transpose() * sum_r / sum_w;
+      // A frame's pose is determined only with 3 or more markers.
+      if (frames[k].markers.size() >= 3) kept.push_back(std::move(frames[k]));
     }
-    // The scale-offset blocks were filled above the diagonal only.
-    normal.triangularView<Eigen::StrictlyLower>() = normal.transpose().triangularView<Eigen::StrictlyLower>();
-    if (pass.frames_used == 0) throw std::invalid_argument("calibration: no frame shows 3 or more markers");
-    // Priors: offsets near the starting model's, worth offset_prior_frames frames; bone-length
-    // factors near 1 with scale_prior_sd.
-    for (std::size_t u = 0; u < used.size(); ++u) {
-      const int m = used[u];
-      const double w =
-          (options.marker_weight.empty() ? 1.0 : options.marker_weight[static_cast<std::size_t>(m)]);
-      const double lambda = std::max(options.offset_prior_frames * std::max(w, 1e-6), 1e-6) / noise_variance;
-      const int at = scale_count + 3 * static_cast<int>(u);
-      normal.block<3, 3>(at, at).diagonal().array() += lambda;
-      rhs.segment<3>(at) -= lambda * (current.markers[static_cast<std::size_t>(m)].offset -
-                                      start.markers[static_cast<std::size_t>(m)].offset);
-    }
-    const double scale_lambda =
-        static_cast<double>(pass.frames_used) / (options.scale_prior_sd * options.scale_prior_sd);
-    for (int s = 0; s < scale_count; ++s) {
-      const double c = cumulative[static_cast<std::size_t>(s)];
-      normal(s, s) += scale_lambda * c * c;
-      rhs(s) -= scale_lambda * c * (c - 1.0);
-    }
-    const Eigen::VectorXd step = normal.ldlt().solve(rhs);
-    if (!step.allFinite())
-      throw std::runtime_error("calibration: the least-squares system could not be solved");
-    body::BodyModel updated = current;
-    for (int j = 0; j < updated.joint_count(); ++j) {
-      const int s = joint_scale[static_cast<std::size_t>(j)];
-      if (s >= 0) updated.joints[static_cast<std::size_t>(j)].translation *= 1.0 + step(s);
-    }
-    for (int s = 0; s < scale_count; ++s) cumulative[static_cast<std::size_t>(s)] *= 1.0 + step(s);
-    for (std::size_t u = 0; u < used.size(); ++u)
-      updated.markers[static_cast<std::size_t>(used[u])].offset +=
-          step.segment<3>(scale_count + 3 * static_cast<int>(u));
-    result.model = updated;
+    if (kept.empty()) throw std::invalid_argument("calibration: no frame shows 3 or more markers");
+    pass.frames_used = static_cast<long>(kept.size());
+    adjustment.adjust(result.model, kept, pass);
     result.passes.push_back(pass);
   }
-  for (int s = 0; s < scale_count; ++s)
-    result.segment_scale[segments[static_cast<std::size_t>(s)]] = cumulative[static_cast<std::size_t>(s)];
+  for (std::size_t s = 0; s < adjustment.segments().size(); ++s)
+    result.segment_scale[adjustment.segments()[s]] = adjustment.cumulative()[s];
   result.mean_marker_distance_before_mm = result.passes.front().mean_marker_distance_mm;
   result.mean_marker_distance_after_mm = result.passes.back().mean_marker_distance_mm;
   return result;
