@@ -74,7 +74,17 @@ class Tracker {
         std::pow(options_.orientation_speed_rad_per_s * dt, 2));
     process_noise_.diagonal().tail(joint_count()).setConstant(std::pow(options_.joint_speed_per_s * dt, 2));
     const Eigen::Index m = 3 * static_cast<Eigen::Index>(used_markers_.size());
-    noise_ = Eigen::MatrixXd::Identity(m, m) * options_.marker_noise_mm * options_.marker_noise_mm;
+    if (!options_.marker_noise_mm_per_marker.empty() &&
+        options_.marker_noise_mm_per_marker.size() != static_cast<std::size_t>(model_.marker_count()))
+      throw std::invalid_argument("one marker noise per model marker is needed (or none)");
+    noise_ = Eigen::MatrixXd::Zero(m, m);
+    for (std::size_t k = 0; k < used_markers_.size(); ++k) {
+      double sd = options_.marker_noise_mm;
+      if (!options_.marker_noise_mm_per_marker.empty() &&
+          !std::isnan(options_.marker_noise_mm_per_marker[static_cast<std::size_t>(used_markers_[k])]))
+        sd = options_.marker_noise_mm_per_marker[static_cast<std::size_t>(used_markers_[k])];
+      noise_.diagonal().segment<3>(3 * static_cast<Eigen::Index>(k)).setConstant(sd * sd);
+    }
     measurement_.resize(m);
     observed_.resize(m);
     estimate_.marker_distance.resize(model_.marker_count());

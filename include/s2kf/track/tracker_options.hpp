@@ -3,8 +3,10 @@
 /// presets ("default", chosen by measurement on the synthetic recordings, and "paper").
 #pragma once
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace s2kf::track {
 
@@ -16,6 +18,9 @@ struct TrackerOptions {
 
   double marker_noise_mm =
       10.0;  ///< per-coordinate SD of a marker against the model (placement, soft tissue, noise)
+  /// Per model marker SD (mm) in place of marker_noise_mm, e.g. a marker set's `noise_mm` for a
+  /// marker on loose skin; empty: marker_noise_mm for every marker. NaN entries take marker_noise_mm.
+  std::vector<double> marker_noise_mm_per_marker;
 
   double position_speed_mm_per_s = 1500.0;   ///< random-walk SD of the root position per second
   double orientation_speed_rad_per_s = 6.0;  ///< random-walk SD of the root orientation per second
@@ -41,6 +46,9 @@ struct TrackerOptions {
   void validate() const {
     if (samples < 3) throw std::invalid_argument("the sample count must be at least 3");
     if (!(marker_noise_mm > 0)) throw std::invalid_argument("the marker noise must be positive");
+    for (double sd : marker_noise_mm_per_marker)
+      if (!std::isnan(sd) && !(sd > 0 && std::isfinite(sd)))
+        throw std::invalid_argument("every per-marker noise must be a positive number of mm");
     if (!(position_speed_mm_per_s >= 0 && orientation_speed_rad_per_s >= 0 && joint_speed_per_s >= 0))
       throw std::invalid_argument("process noise levels must not be negative");
     if (min_markers_to_start < 3) throw std::invalid_argument("at least 3 markers are needed to start");
