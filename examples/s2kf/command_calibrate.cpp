@@ -29,7 +29,7 @@ struct CalibrateSettings {
   std::string markerset;
   std::string out;
   double height_mm = 0;  // 0: estimate
-  int iterations = 2;
+  int iterations = 1;
   long frames = 1200;
   bool quiet = false;
   bool no_scales = false;
@@ -126,7 +126,7 @@ const RegisterCommand registration{
                      "bundled marker set (kit, cmu, plugin_gait) or a .json file (default: the best match)");
       app.add_option("--height", settings->height_mm, "subject height in mm (default: estimated)")
           ->check(CLI::Range(300.0, 3000.0));
-      app.add_option("--iterations", settings->iterations, "rounds of tracking and bundle adjustment (default 2)")
+      app.add_option("--iterations", settings->iterations, "rounds of tracking and bundle adjustment (default 1)")
           ->check(CLI::Range(1, 20));
       app.add_option("--frames", settings->frames, "frames from the start used (default 1200)")
           ->check(CLI::Range(10L, 1000000L));

@@ -218,7 +218,6 @@ TEST(SubjectCalibration, LowersJointAngleErrorAndKeepsJointsInsideLimits) {
   const body::BodyModel model = body::mmm_body_model(1750);
   const track::MarkerMapping mapping = track::map_markers(s.recording.marker_names, model.marker_names());
   track::CalibrationOptions options;
-  options.iterations = 2;
   options.final_pass = false;
   const track::SubjectCalibration calibration =
       track::calibrate_subject(model, mapping, fast_options(), 100.0, s.points, s.visible, options);
