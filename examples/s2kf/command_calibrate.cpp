@@ -55,7 +55,7 @@ void run_calibrate(const CalibrateSettings& settings) {
   for (const c3d::PointLabel& label : info.labels)
     labels.push_back(label.model_output ? std::string() : label.name);
   const MarkerSetChoice choice = choose_marker_set_for(labels, settings.markerset, "");
-  const track::TrackerOptions options;
+  track::TrackerOptions options;
   if (choice.mapping.markers_used() < options.min_markers_to_start)
     throw UserError(settings.input + ": only " + std::to_string(choice.mapping.markers_used()) +
                     " of its labels are markers of the set " + choice.set.name + "; at least " +
@@ -67,6 +67,7 @@ void run_calibrate(const CalibrateSettings& settings) {
   const double height = found->mm;
   const std::string& height_source = found->source;
   const body::BodyModel model = choice.model.scaled(height);
+  apply_marker_noise(choice.set, options);
   const track::SubjectCalibration calibration =
       calibrate_recording(*reader, model, choice, options, info.rate, settings.iterations, settings.frames,
                           true, !settings.no_scales);
@@ -79,7 +80,10 @@ void run_calibrate(const CalibrateSettings& settings) {
   for (const track::CalibrationPass& pass : calibration.passes)
     passes.push_back({{"mean_marker_distance_mm", pass.mean_marker_distance_mm},
                       {"frames_used", pass.frames_used},
-                      {"residuals_rejected", pass.residuals_rejected}});
+                      {"residuals_rejected", pass.residuals_rejected},
+                      {"bundle_iterations", pass.bundle_iterations},
+                      {"bundle_rms_before_mm", pass.rms_before_mm},
+                      {"bundle_rms_after_mm", pass.rms_after_mm}});
   // The loader rejects unknown keys, so the pass-by-pass report goes to a separate _report.json
   // and the subject file carries only a one-line summary in its description.
   document["description"] = subject.description + " on " + fs::path(settings.input).filename().string() +
@@ -126,7 +130,8 @@ const RegisterCommand registration{
                      "bundled marker set (kit, cmu, plugin_gait) or a .json file (default: the best match)");
       app.add_option("--height", settings->height_mm, "subject height in mm (default: estimated)")
           ->check(CLI::Range(300.0, 3000.0));
-      app.add_option("--iterations", settings->iterations, "rounds of tracking and bundle adjustment (default 1)")
+      app.add_option("--iterations", settings->iterations,
+                     "rounds of tracking and bundle adjustment (default 1)")
           ->check(CLI::Range(1, 20));
       app.add_option("--frames", settings->frames, "frames from the start used (default 1200)")
           ->check(CLI::Range(10L, 1000000L));

@@ -51,6 +51,7 @@ struct TrackSettings {
   int calibration_frames = 1200;
   bool smooth = false;
   long figure_frame = -1;  // >= 0: draw this frame
+  std::string truth;       // a ground-truth motion CSV (simulated recordings): accuracy in the summary
   bool realtime = false;
   bool quiet = false;
   int jobs = 0;
@@ -59,6 +60,9 @@ struct TrackSettings {
 /// Memory the smoother may take before --smooth refuses a recording (it keeps every frame's
 /// 46-state posterior, TrackingSmoother::kBytesPerFrame, about 17 KB).
 constexpr double kSmoothingMemoryLimitBytes = 8e9;
+
+/// Frames left out of the accuracy against the truth (spec/evaluation.md: the filter's start-up).
+constexpr long kTruthWarmupFrames = 20;
 
 /// Coordinates beyond a kilometre are not a body: the file's units or scale must be wrong.
 constexpr double kAbsurdMm = 1e6;
@@ -106,6 +110,18 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   const c3d::C3dInfo& info = reader->info();
   if (info.frame_count == 0) throw UserError(input + ": the recording holds no complete frame");
   if (!(info.rate > 0)) throw UserError(input + ": the recording has no valid frame rate");
+  // Ground truth, read before tracking so a wrong file fails fast.
+  std::optional<io::MotionTable> truth;
+  if (!settings.truth.empty()) {
+    try {
+      truth = io::load_motion_csv(settings.truth);
+    } catch (const std::exception& e) {
+      throw UserError(std::string("--truth: ") + e.what());
+    }
+    if (truth->frames() != info.frame_count)
+      throw UserError("--truth: " + settings.truth + " has " + std::to_string(truth->frames()) +
+                      " rows, but " + input + " has " + std::to_string(info.frame_count) + " frames");
+  }
   const MarkerSetChoice choice =
       choose_marker_set_for(recording_labels(info), settings.markerset, settings.subject);
   body::BodyModel model = choice.model;
@@ -117,6 +133,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     }
   track::TrackerOptions options = track::preset_options(settings.preset, info.rate);
   if (settings.samples > 0) options.samples = settings.samples;
+  apply_marker_noise(choice.set, options);
   if (mapping.markers_used() == 0)
     throw UserError(input + ": none of its " + std::to_string(info.point_count) +
                     " point labels is a marker of the marker set " + choice.set.name +
@@ -151,8 +168,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   bool calibrate = settings.calibrate && settings.subject.empty();
   if (calibrate) {
     try {
-      const track::SubjectCalibration calibration = calibrate_recording(
-          *reader, model, choice, options, info.rate, 3, settings.calibration_frames, false);
+      const track::SubjectCalibration calibration =
+          calibrate_recording(*reader, model, choice, options, info.rate,
+                              track::CalibrationOptions{}.iterations, settings.calibration_frames, false);
       model = calibration.model;
       calibration_summary = {
           {"frames", std::min<std::int64_t>(settings.calibration_frames, info.frame_count)},
@@ -278,12 +296,50 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   // The convergence rule (spec/evaluation.md) restarts at any late frame above 1.5 times the final
   // level, so on long real recordings the mean over every tracked frame is reported as well.
   const double overall = track::mean_from(run.mean_marker_distance, 0);
+  if (calibrate) {
+    // The calibration's distance with the calibrated subject, from this run: the tracker is causal,
+    // so its first frames are what a final calibration pass would track (s2kf calibrate's "after").
+    const auto& distance = run.mean_marker_distance;
+    const std::size_t end =
+        std::min<std::size_t>(distance.size(), static_cast<std::size_t>(settings.calibration_frames));
+    std::size_t first = 0;
+    while (first < end && !std::isfinite(distance[first])) ++first;
+    const std::size_t from =
+        std::min<std::size_t>(end, first + static_cast<std::size_t>(track::CalibrationOptions{}.skip_frames));
+    const double after =
+        track::mean_from(std::vector<double>(distance.begin() + static_cast<std::ptrdiff_t>(from),
+                                             distance.begin() + static_cast<std::ptrdiff_t>(end)),
+                         0);
+    calibration_summary["mean_marker_distance_after_mm"] =
+        std::isfinite(after) ? nlohmann::json(after) : nlohmann::json(nullptr);
+  }
   std::vector<double>& latency_ms = run.seconds;  // not needed in seconds any more
   for (double& s : latency_ms) s *= 1000;
   const double median_ms = track::quantile(latency_ms, 0.5), p99_ms = track::quantile(latency_ms, 0.99);
 
   motion_files.finish();
   marker_report.commit();
+  // Accuracy against the truth, from the motion as written (frames from the 20th on).
+  nlohmann::json truth_summary = nullptr;
+  std::optional<track::TruthComparison> accuracy;
+  if (truth) {
+    try {
+      accuracy =
+          track::compare_with_truth(model, io::load_motion_csv(prefix + ".csv"), *truth, kTruthWarmupFrames);
+    } catch (const std::invalid_argument& e) {
+      throw UserError("--truth: " + settings.truth + ": " + e.what());
+    }
+    truth_summary = {{"frames_compared", accuracy->frames},
+                     {"warmup_frames", kTruthWarmupFrames},
+                     {"all_joint_rms_deg", accuracy->all_joint_rms_deg},
+                     {"segment_orientation_rms_deg", accuracy->segment_orientation_rms_deg},
+                     {"limb_flexion_rms_deg", accuracy->limb_flexion_rms_deg},
+                     {"root_position_rms_mm", accuracy->root_position_rms_mm},
+                     {"root_orientation_rms_deg", accuracy->root_orientation_rms_deg},
+                     {"worst_joint", accuracy->worst_joint},
+                     {"worst_joint_rms_deg", accuracy->worst_joint_rms_deg},
+                     {"joint_limit_violations", accuracy->joint_limit_violations}};
+  }
   std::vector<std::string> markers_used;
   for (int m = 0; m < model.marker_count(); ++m)
     if (mapping.point_of_marker[m] >= 0) markers_used.push_back(model.markers[m].name);
@@ -312,6 +368,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       {"warnings", warnings},
   };
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
+  if (truth) summary["truth"] = truth_summary;
   io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
 
   std::ostringstream paragraph;
@@ -320,10 +377,14 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
             << format(info.rate, 0) << " Hz with " << markers_used.size() << " markers ("
             << mapping.ignored_labels.size() << " labels ignored), body height " << format(height, 0)
             << " mm (" << height_source << "), marker set " << choice.set.name;
+  const auto millimetres = [](const nlohmann::json& value) {
+    return value.is_number() && std::isfinite(value.get<double>()) ? format(value.get<double>(), 1)
+                                                                   : std::string("n/a");
+  };
   if (calibrate)
     paragraph << ", calibrated on " << calibration_summary["frames"].get<std::int64_t>() << " frames ("
-              << format(calibration_summary["mean_marker_distance_before_mm"].get<double>(), 1) << " -> "
-              << format(calibration_summary["mean_marker_distance_after_mm"].get<double>(), 1) << " mm)";
+              << millimetres(calibration_summary["mean_marker_distance_before_mm"]) << " -> "
+              << millimetres(calibration_summary["mean_marker_distance_after_mm"]) << " mm)";
   if (std::isfinite(level))
     paragraph << ". Converged at frame " << converged << "; mean marker distance after that "
               << format(level, 1) << " mm (" << format(overall, 1) << " mm over all tracked frames)";
@@ -336,6 +397,12 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   paragraph << ".";
   if (smoother) paragraph << " Motion smoothed (RTS); marker distances are the filter's.";
   if (settings.realtime) paragraph << " Real-time pacing: " << deadline_misses << " deadline misses.";
+  if (accuracy)
+    paragraph << " Against the truth (frames " << kTruthWarmupFrames << " on): all-joint RMS "
+              << format(accuracy->all_joint_rms_deg, 2) << " deg, segment orientation "
+              << format(accuracy->segment_orientation_rms_deg, 2) << " deg, limb flexion "
+              << format(accuracy->limb_flexion_rms_deg, 2) << " deg, root position "
+              << format(accuracy->root_position_rms_mm, 1) << " mm.";
   if (!warnings.empty())
     paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
   paragraph << "\nWrote " << prefix << ".csv, .mot, .bvh, .json and _markers.csv";
@@ -374,6 +441,8 @@ void run_track(const TrackSettings& settings) {
     throw UserError("--smooth works on the S2KF's estimates; it cannot be combined with --method baseline");
   const std::vector<std::string> files = expand_inputs(settings.inputs);
   const bool batch = files.size() > 1;
+  if (batch && !settings.truth.empty())
+    throw UserError("--truth belongs to one recording; track that recording on its own");
   const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
   if (!batch) {
     const std::string prefix = settings.out.empty() ? fs::path(files[0]).stem().string() : settings.out;
@@ -442,6 +511,9 @@ const RegisterCommand registration{
       app.add_option("--figure", settings->figure_frame,
                      "draw frame F (0-based) as tracked: PREFIX_frameF.png/.svg, data and gnuplot script")
           ->check(CLI::NonNegativeNumber);
+      app.add_option(
+          "--truth", settings->truth,
+          "ground-truth motion CSV (s2kf simulate's _truth.csv): adds the accuracy to the summary");
       app.add_flag("--realtime", settings->realtime,
                    "pace frames at the recording's rate and count deadline misses");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");

@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -261,6 +262,18 @@ inline std::vector<double> calibration_weights(const body::MarkerSet& set, doubl
     weights.push_back(w);
   }
   return weights;
+}
+
+/// The tracker's per-marker noise from the set: each marker's `noise_mm`, NaN (the tracker's
+/// common noise) where the set gives none; left empty when no marker has its own.
+inline void apply_marker_noise(const body::MarkerSet& set, track::TrackerOptions& options) {
+  options.marker_noise_mm_per_marker.clear();
+  const bool any = std::any_of(set.entries.begin(), set.entries.end(),
+                               [](const body::MarkerSetEntry& entry) { return entry.noise_mm.has_value(); });
+  if (!any) return;
+  for (const body::MarkerSetEntry& entry : set.entries)
+    options.marker_noise_mm_per_marker.push_back(entry.noise_mm ? *entry.noise_mm
+                                                                : std::numeric_limits<double>::quiet_NaN());
 }
 
 /// A calibrated subject as a marker set: explicit frames and offsets at the reference height

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -43,7 +44,7 @@ struct CalibrationOptions {
   /// prior in the same units as the marker residuals over the tracker's marker noise. It decides
   /// the directions the data cannot see (an end segment's markers turned about its 3-DoF joint,
   /// which a constant joint-angle offset undoes) and barely moves the ones it sees.
-  double offset_prior_sd_mm = 15.0;
+  double offset_prior_sd_mm = 10.0;
   /// SD of a segment's length factor around 1, counted once per frame used (a Gaussian prior in
   /// the same units as the marker residuals over the tracker's marker noise). Over n frames it is
   /// an SD of 0.4 / sqrt(n) (2.3 % at 300 frames): it decides the lengths no marker observes, such
@@ -89,7 +90,9 @@ struct SubjectCalibration {
   std::map<std::string, double> segment_scale;  ///< bone-length factor per segment, against the input model
   std::vector<CalibrationPass> passes;          ///< pass 0 tracks with the input model
   double mean_marker_distance_before_mm = 0;    ///< pass 0
-  double mean_marker_distance_after_mm = 0;     ///< the final pass (or the last pass when there is none)
+  /// The final pass; NaN without one (the caller's own tracking with the calibrated model gives it:
+  /// the tracker is causal, so its first frames are that pass).
+  double mean_marker_distance_after_mm = std::numeric_limits<double>::quiet_NaN();
 };
 
 namespace detail {
@@ -513,7 +516,7 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
   for (std::size_t s = 0; s < adjustment.segments().size(); ++s)
     result.segment_scale[adjustment.segments()[s]] = adjustment.cumulative()[s];
   result.mean_marker_distance_before_mm = result.passes.front().mean_marker_distance_mm;
-  result.mean_marker_distance_after_mm = result.passes.back().mean_marker_distance_mm;
+  if (options.final_pass) result.mean_marker_distance_after_mm = result.passes.back().mean_marker_distance_mm;
   return result;
 }
 
