@@ -120,7 +120,7 @@ void run_calibrate(const CalibrateSettings& settings) {
             << " calibration iteration(s).\nWrote " << settings.out << " and " << report_path << ".\n";
 }
 
-const RegisterCommand registration{
+const RegisterCommand calibrate_registration{
     "calibrate", "Estimate a subject's marker offsets and bone lengths from a C3D recording",
     [](CLI::App& app) {
       auto settings = std::make_shared<CalibrateSettings>();

@@ -414,7 +414,7 @@ void run_evaluate(const EvaluateSettings& settings) {
   }
 }
 
-const RegisterCommand registration{
+const RegisterCommand evaluate_registration{
     "evaluate",
     "Reproduce the paper's evaluation: S2KF against a gradient baseline, occlusion, sample counts",
     [](CLI::App& app) {

@@ -239,7 +239,7 @@ void run(const Settings& settings) {
   std::printf("wrote %s\nwrote %s\nwrote %s\n", out.string().c_str(), truth_path.c_str(), clean_path.c_str());
 }
 
-const s2kf::cli::RegisterCommand registration{
+const s2kf::cli::RegisterCommand simulate_registration{
     "simulate", "Make a synthetic recording with ground truth (C3D, _truth.csv, _clean.csv)",
     [](CLI::App& app) {
       auto settings = std::make_shared<Settings>();

@@ -481,7 +481,7 @@ void run_track(const TrackSettings& settings) {
                     " recordings could not be tracked (see above)");
 }
 
-const RegisterCommand registration{
+const RegisterCommand track_registration{
     "track", "Track whole-body motion in C3D recordings with the S2KF", [](CLI::App& app) {
       auto settings = std::make_shared<TrackSettings>();
       app.add_option("recordings", settings->inputs, "C3D files or directories of them")->required();

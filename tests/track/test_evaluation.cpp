@@ -38,9 +38,9 @@ namespace fs = std::filesystem;
 
 constexpr double kDegrees = 180.0 / 3.14159265358979323846;
 
-std::string data(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
+std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
 
-fs::path scratch(const std::string& name) {
+fs::path fresh_scratch(const std::string& name) {
   const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -70,7 +70,7 @@ double json_number(const std::string& text, const std::string& key, const std::s
 sim::Recording exact_handstand(Eigen::Index frames, double height_mm) {
   const body::BodyModel reference = body::mmm_body_model(1000);
   const cli::JointTable joints{reference.joint_names(), reference.lower_limits(), reference.upper_limits()};
-  const sim::KeyframeMotion motion = cli::load_motion_file(data("motions/handstand.json"), joints, 1);
+  const sim::KeyframeMotion motion = cli::load_motion_file(data_file("motions/handstand.json"), joints, 1);
   sim::SubjectOptions subject_options;
   subject_options.height_mm = height_mm;
   subject_options.segment_scale_sd = subject_options.placement_sd_mm = 0;
@@ -113,7 +113,7 @@ c3d::Recording as_c3d(const sim::Recording& recording) {
 }
 
 c3d::Recording bundled_handstand(Eigen::Index frames) {
-  return track::first_frames(c3d::read_c3d(data("handstand.c3d")), frames);
+  return track::first_frames(c3d::read_c3d(data_file("handstand.c3d")), frames);
 }
 
 TEST(GradientBaseline, ConvergesToTheTruthOnExactFrames) {
@@ -214,7 +214,7 @@ TEST(GradientBaseline, StaysOnTheLimitWhenTheMarkersAskForMore) {
 TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
   const c3d::Recording recording = bundled_handstand(60);
   const track::EvaluationSetup setup = track::prepare_evaluation(recording);
-  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data("handstand_truth.csv")), 60);
+  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
   track::check_truth(truth, setup, 60);
   const track::MethodResult s2kf =
       track::evaluate_method(setup, recording, track::Method::s2kf, 93, &truth, 20);
@@ -336,7 +336,7 @@ TEST(Evaluation, SampleSweepRunsEachCount) {
 TEST(Evaluation, TruthThatDoesNotFitIsRejected) {
   const c3d::Recording recording = bundled_handstand(10);
   const track::EvaluationSetup setup = track::prepare_evaluation(recording);
-  io::MotionTable truth = track::first_rows(io::load_motion_csv(data("handstand_truth.csv")), 10);
+  io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 10);
   EXPECT_NO_THROW(track::check_truth(truth, setup, 10));
   EXPECT_THROW(track::check_truth(truth, setup, 11), std::invalid_argument);
   truth.joint_names[3] = "elbow";
@@ -344,7 +344,7 @@ TEST(Evaluation, TruthThatDoesNotFitIsRejected) {
 }
 
 TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
-  const fs::path out = scratch("evaluate_short");
+  const fs::path out = fresh_scratch("evaluate_short");
   const CommandResult result =
       run_command("evaluate --frames 60 --runs 2 --samples 93 --quiet --out " + out.string());
   ASSERT_EQ(result.status, 0) << result.output;
@@ -368,7 +368,7 @@ TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
   // The numbers are the library's for the same input.
   const c3d::Recording recording = bundled_handstand(60);
   const track::EvaluationSetup setup = track::prepare_evaluation(recording);
-  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data("handstand_truth.csv")), 60);
+  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
   const track::MethodResult s2kf =
       track::evaluate_method(setup, recording, track::Method::s2kf, 93, &truth, 20);
   const track::MethodResult baseline =
@@ -383,7 +383,7 @@ TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
 }
 
 TEST(EvaluateCommand, BadInputGivesASentenceAndExitStatusOne) {
-  const fs::path dir = scratch("evaluate_bad");
+  const fs::path dir = fresh_scratch("evaluate_bad");
   auto expect_failure = [&](const std::string& arguments, const std::string& phrase) {
     const CommandResult result =
         run_command("evaluate " + arguments + " --quiet --out " + (dir / "out").string());
@@ -400,15 +400,15 @@ TEST(EvaluateCommand, BadInputGivesASentenceAndExitStatusOne) {
     std::ofstream bad(dir / "columns.csv");
     bad << "frame,time,root_x,root_y,root_z,root_roll,root_pitch,root_yaw,elbow\n0,0,0,0,0,0,0,0,0\n";
   }
-  expect_failure(data("handstand.c3d") + " --frames 5 --truth " + (dir / "columns.csv").string(),
+  expect_failure(data_file("handstand.c3d") + " --frames 5 --truth " + (dir / "columns.csv").string(),
                  "joint columns");
   {
-    std::ifstream in(data("handstand_truth.csv"));
+    std::ifstream in(data_file("handstand_truth.csv"));
     std::ofstream shortened(dir / "short.csv");
     std::string line;
     for (int i = 0; i < 11 && std::getline(in, line); ++i) shortened << line << "\n";
   }
-  expect_failure(data("handstand.c3d") + " --frames 5 --truth " + (dir / "short.csv").string(),
+  expect_failure(data_file("handstand.c3d") + " --frames 5 --truth " + (dir / "short.csv").string(),
                  "has 10 frames");
 }
 
