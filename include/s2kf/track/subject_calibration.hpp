@@ -32,8 +32,8 @@ namespace s2kf::track {
 struct CalibrationOptions {
   /// Rounds of (track the recording with the current model, then bundle-adjust poses and subject).
   /// One is enough: the bundle adjustment converges from the tracked poses, and a second round
-  /// (re-tracking with the calibrated model, tighter outlier selection) changed the real
-  /// recordings' distances by under 1 mm either way.
+  /// (re-tracking with the calibrated model, tighter outlier selection) made two real recordings'
+  /// distances 0.2 and 1.1 mm worse (docs/real-data.md).
   int iterations = 1;
   /// Levenberg-Marquardt iterations per bundle adjustment at most; it stops earlier when an
   /// accepted step lowers the cost by less than `relative_tolerance` of it.
