@@ -736,7 +736,7 @@ TEST(TrackCommand, BadCoordinatesMidFileLeaveNoOutputAndNoTemporary) {
 
 // Runs the s2kf program (no shell, output discarded); its exit status and peak resident set size
 // (kB) as wait4() reports them for that one child.
-std::pair<int, long> run_for_peak_memory(const std::vector<std::string>& arguments) {
+[[maybe_unused]] std::pair<int, long> run_for_peak_memory(const std::vector<std::string>& arguments) {
   std::vector<std::string> words{S2KF_CLI};
   words.insert(words.end(), arguments.begin(), arguments.end());
   std::vector<char*> argv;
