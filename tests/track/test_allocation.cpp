@@ -20,13 +20,7 @@
 #include <string>
 #include <vector>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define S2KF_TEST_UNDER_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define S2KF_TEST_UNDER_ASAN 1
-#endif
-#endif
+#include "address_sanitizer.hpp"
 
 namespace {
 std::atomic<bool> counting{false};

@@ -140,6 +140,15 @@ track::TrackerOptions fast_options() {
   return options;
 }
 
+/// Calibrates `model` on the synthetic recording with the default options and no final tracking
+/// pass (the tests compare against the truth instead).
+track::SubjectCalibration calibrate(const body::BodyModel& model, const Synthetic& s) {
+  track::CalibrationOptions options;
+  options.final_pass = false;
+  return track::calibrate_subject(model, track::map_markers(s.recording.marker_names, model.marker_names()),
+                                  fast_options(), 100.0, s.points, s.visible, options);
+}
+
 io::MotionTable track_all(const body::BodyModel& model, const Synthetic& s,
                           const track::TrackerOptions& options) {
   const track::MarkerMapping mapping = track::map_markers(s.recording.marker_names, model.marker_names());
@@ -183,10 +192,7 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
   for (std::size_t k = 0; k < s.points.size(); ++k) estimator.add_frame(s.points[k], s.visible[k]);
   ASSERT_TRUE(estimator.height_mm().has_value());
   const body::BodyModel model = base.scaled(*estimator.height_mm());
-  track::CalibrationOptions options;
-  options.final_pass = false;
-  const track::SubjectCalibration calibration =
-      track::calibrate_subject(model, mapping, fast_options(), 100.0, s.points, s.visible, options);
+  const track::SubjectCalibration calibration = calibrate(model, s);
   std::map<std::string, double> ones;
   for (const auto& entry : calibration.segment_scale) ones[entry.first] = 1.0;
   const double before = offset_error(model, s.subject), after = offset_error(calibration.model, s.subject);
@@ -216,11 +222,7 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
 TEST(SubjectCalibration, LowersJointAngleErrorAndKeepsJointsInsideLimits) {
   const Synthetic s = make_synthetic(300, 8.0, 11);  // default soft tissue
   const body::BodyModel model = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(s.recording.marker_names, model.marker_names());
-  track::CalibrationOptions options;
-  options.final_pass = false;
-  const track::SubjectCalibration calibration =
-      track::calibrate_subject(model, mapping, fast_options(), 100.0, s.points, s.visible, options);
+  const track::SubjectCalibration calibration = calibrate(model, s);
   const io::MotionTable truth = truth_table(s, model);
   const track::TruthComparison plain =
       track::compare_with_truth(model, track_all(model, s, fast_options()), truth, 50);
@@ -304,12 +306,7 @@ namespace {
 TEST(SubjectCalibration, DISABLED_RecoveryOverSeeds) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const Synthetic s = make_synthetic(1200, 0.0, seed);
-    const body::BodyModel model = body::mmm_body_model(1750);
-    const track::MarkerMapping mapping = track::map_markers(s.recording.marker_names, model.marker_names());
-    track::CalibrationOptions options;
-    options.final_pass = false;
-    const track::SubjectCalibration calibration =
-        track::calibrate_subject(model, mapping, fast_options(), 100.0, s.points, s.visible, options);
+    const track::SubjectCalibration calibration = calibrate(body::mmm_body_model(1750), s);
     const double offsets = offset_error(calibration.model, s.subject);
     const double lengths = worst_scale_error(calibration, s.subject, 1.0);
     std::cout << "seed " << seed << ": offset error " << offsets << " mm, worst length error "

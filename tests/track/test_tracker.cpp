@@ -38,13 +38,7 @@
 #include <stdexcept>
 #include <string>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define S2KF_TEST_UNDER_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define S2KF_TEST_UNDER_ASAN 1
-#endif
-#endif
+#include "address_sanitizer.hpp"
 
 namespace {
 
