@@ -15,7 +15,9 @@ if [ "${1:-}" = "--sanitize" ]; then
   # -O1: sanitizer builds compile much faster than at -O2/-g and still run the suite quickly.
   flags=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE=-O1 -DS2KF_SANITIZE=ON -DS2KF_BUILD_BENCHMARKS=OFF)
 fi
-scripts/install-deps.sh
+# Beyond the build packages, the tests use: pybind11 and numpy/pytest (the Python module), xmllint
+# (the OpenSim model's well-formedness), blender (the BVH import test) and chromium (the viewer test).
+scripts/install-deps.sh pybind11-dev python3-dev python3-numpy python3-pytest libxml2-utils blender chromium
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake -S . -B "$build" "${flags[@]}" >/dev/null
 cmake --build "$build" -j "$jobs"
