@@ -61,7 +61,7 @@ void BM_C3dReadStreaming(benchmark::State& state) {
   const auto bytes = static_cast<std::int64_t>(std::filesystem::file_size(path));
   for (auto _ : state) {
     s2kf::c3d::C3dReader reader(path);
-    s2kf::c3d::Frame frame;
+    s2kf::MarkerFrame frame;
     double sum = 0.0;
     while (reader.read_frame(frame)) sum += frame.positions(0, 0);
     benchmark::DoNotOptimize(sum);

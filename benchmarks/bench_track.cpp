@@ -80,7 +80,7 @@ track::Tracker warmed_tracker(int samples) {
   const Scenario& s = Scenario::get();
   track::TrackerOptions options;
   options.samples = samples;
-  track::Tracker tracker(s.model, s.mapping, options, s.rate);
+  track::Tracker tracker(s.model, s.mapping, options, s.rate, lcd_sample_set(46, options.samples).set);
   for (int f = 0; f < kWarmupFrames; ++f) tracker.process(s.frames[f], s.all_visible[f]);
   return tracker;
 }
@@ -228,7 +228,7 @@ void BM_TrackFirstFrames(benchmark::State& state) {
   const Scenario& s = Scenario::get();
   track::TrackerOptions options;
   options.samples = samples;
-  const track::Tracker fresh(s.model, s.mapping, options, s.rate);
+  const track::Tracker fresh(s.model, s.mapping, options, s.rate, lcd_sample_set(46, options.samples).set);
   for (auto _ : state) {
     state.PauseTiming();
     auto tracker = std::make_unique<track::Tracker>(fresh);

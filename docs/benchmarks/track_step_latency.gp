@@ -1,5 +1,5 @@
 set terminal pngcairo size 900,560
-set output '/work/main/docs/figures/track_step_latency.png'
+set output 'docs/figures/track_step_latency.png'  # run from the repository root
 set title 'S2KF tracking step (handstand, 46 states) vs sample count L, median per frame'
 set xlabel 'sample count L'; set ylabel 'time per frame (µs)'
 set logscale xy; set grid; set key left top

@@ -1,14 +1,13 @@
 // `s2kf calibrate`: estimate a subject (body height, bone lengths, where each marker sits) from a
 // recording of that subject, and write it as a marker-set file `s2kf track --subject` loads.
-#include "calibration_hook.hpp"
 #include "command.hpp"
 #include "marker_set_json.hpp"
-#include "subject_height.hpp"
+#include "tracker_samples.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/io/atomic_file.hpp>
-#include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/track/tracker_options.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
+#include <s2kf/track/session.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -42,35 +41,33 @@ std::string fixed(double value, int precision) {
 }
 
 void run_calibrate(const CalibrateSettings& settings) {
-  std::unique_ptr<c3d::C3dReader> reader;
+  std::unique_ptr<c3d::C3dFrameSource> source;
   try {
-    reader = std::make_unique<c3d::C3dReader>(settings.input);
+    source = std::make_unique<c3d::C3dFrameSource>(settings.input);
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
-  const c3d::C3dInfo& info = reader->info();
-  if (info.frame_count == 0) throw UserError(settings.input + ": the recording holds no complete frame");
-  if (!(info.rate > 0)) throw UserError(settings.input + ": the recording has no valid frame rate");
-  std::vector<std::string> labels;
-  for (const c3d::PointLabel& label : info.labels)
-    labels.push_back(label.model_output ? std::string() : label.name);
-  const MarkerSetChoice choice = choose_marker_set_for(labels, settings.markerset, "");
-  track::TrackerOptions options;
-  if (choice.mapping.markers_used() < options.min_markers_to_start)
-    throw UserError(settings.input + ": only " + std::to_string(choice.mapping.markers_used()) +
-                    " of its labels are markers of the set " + choice.set.name + "; at least " +
-                    std::to_string(options.min_markers_to_start) + " are needed");
-  const std::optional<SubjectHeight> found =
-      subject_height(*reader, choice, settings.height_mm, settings.input);
-  if (!found)
-    throw UserError(settings.input + ": the body height cannot be estimated from the markers; give --height");
-  const double height = found->mm;
-  const std::string& height_source = found->source;
-  const body::BodyModel model = choice.model.scaled(height);
-  apply_marker_noise(choice.set, options);
-  const track::SubjectCalibration calibration =
-      calibrate_recording(*reader, model, choice, options, info.rate, settings.iterations, settings.frames,
-                          true, !settings.no_scales);
+  const c3d::C3dInfo& info = source->info();
+  const MarkerSetChoice choice = choose_marker_set_for(source->labels(), settings.markerset, "");
+  track::SessionOptions options;
+  options.height_mm = settings.height_mm;
+  options.fallback_height_mm = 0;  // a subject file needs a real height: refuse instead
+  options.calibrate = true;
+  options.calibration_may_fail = false;
+  options.calibration_frames = settings.frames;
+  options.calibration.iterations = settings.iterations;
+  options.calibration.final_pass = true;
+  options.calibration.estimate_segment_scales = !settings.no_scales;
+  track::Session session;
+  try {
+    session = track::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
+  } catch (const std::invalid_argument& e) {
+    throw UserError(settings.input + ": " + e.what());
+  }
+  const track::SubjectCalibration& calibration = *session.calibration;
+  const double height = session.height_mm;
+  const std::string& height_source = session.height_source;
+  const std::vector<std::string> messages = marker_set_messages(choice, session.mapping);
 
   const std::string name = fs::path(settings.out).stem().string();
   const body::MarkerSet subject =
@@ -107,12 +104,12 @@ void run_calibrate(const CalibrateSettings& settings) {
       {"passes", passes},
       {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},
       {"mean_marker_distance_after_mm", calibration.mean_marker_distance_after_mm},
-      {"warnings", choice.warnings},
-      {"messages", choice.messages}};
+      {"warnings", session.warnings},
+      {"messages", messages}};
   io::write_file_atomically(report_path, [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
   if (settings.quiet) return;
-  for (const std::string& message : choice.messages) std::cout << message << "\n";
-  for (const std::string& warning : choice.warnings) std::cout << "warning: " << warning << "\n";
+  for (const std::string& message : messages) std::cout << message << "\n";
+  for (const std::string& warning : session.warnings) std::cout << "warning: " << warning << "\n";
   std::cout << fs::path(settings.input).filename().string() << ": body height " << fixed(height, 0) << " mm ("
             << height_source << "); mean marker distance "
             << fixed(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "

@@ -3,9 +3,12 @@
 // sweep, accuracy against ground truth; CSV series, gnuplot figures and a summary.json.
 #include "command.hpp"
 #include "gnuplot.hpp"
+#include "marker_set_json.hpp"
+#include "tracker_samples.hpp"
 
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/track/evaluation.hpp>
 
@@ -38,6 +41,7 @@ struct EvaluateSettings {
   std::string out = "results/evaluation";
   long frames = 0;
   long warmup = 20;
+  bool calibrate = true;
   bool quiet = false;
 };
 
@@ -150,17 +154,24 @@ void run_evaluate(const EvaluateSettings& settings) {
           ? kDefaultSamples
           : sample_counts.front();
 
-  c3d::Recording complete;
+  MarkerSequence complete;
   try {
     complete = c3d::read_c3d(recording_path);
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
   const Eigen::Index recorded_frames = complete.frame_count();
-  complete = track::first_frames(complete, settings.frames);
-  track::EvaluationSetup setup;
+  if (settings.frames > 0 && settings.frames < complete.frame_count())
+    complete = complete.frames(0, settings.frames);
+  // Prepared exactly as `s2kf track` prepares a recording: the best-matching marker set, the
+  // estimated height, and the subject calibration unless --no-calibrate.
+  track::Session setup;
   try {
-    setup = track::prepare_evaluation(complete);
+    SequenceFrameSource source(complete);
+    const MarkerSetChoice choice = choose_marker_set_for(complete.labels, "", "");
+    track::SessionOptions options;
+    options.calibrate = settings.calibrate;
+    setup = track::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(recording_path + ": " + e.what());
   }
@@ -389,6 +400,8 @@ void run_evaluate(const EvaluateSettings& settings) {
                   {"rate_hz", setup.rate_hz},
                   {"height_mm", setup.height_mm},
                   {"markers", setup.mapping.markers_used()},
+                  {"marker_set", setup.marker_set.name},
+                  {"calibrated", setup.calibration.has_value()},
                   {"hidden_marker_frames_in_input", hidden_in_input},
                   {"warmup_frames", settings.warmup},
                   {"machine", machine_name()},
@@ -437,6 +450,8 @@ const RegisterCommand evaluate_registration{
       app.add_option("--warmup", settings->warmup,
                      "frames left out of the accuracy against truth (default 20)")
           ->check(CLI::Range(0L, 100000000L));
+      app.add_flag("!--no-calibrate", settings->calibrate,
+                   "evaluate with the marker set as it is (default: calibrate the subject first, as s2kf track does)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
       app.callback([settings] { run_evaluate(*settings); });
     }};

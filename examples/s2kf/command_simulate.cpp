@@ -82,24 +82,19 @@ std::string with_suffix(const fs::path& c3d, const std::string& suffix) {
 }
 
 void write_c3d_recording(const fs::path& path, const s2kf::sim::Recording& recording) {
-  Eigen::MatrixXd positions(3 * recording.markers(), recording.frames());
-  for (Eigen::Index k = 0; k < recording.frames(); ++k) {
-    const Eigen::Matrix3Xd& frame = recording.measured[static_cast<std::size_t>(k)];
-    positions.col(k) = Eigen::Map<const Eigen::VectorXd>(frame.data(), frame.size());
-  }
-  s2kf::c3d::write_c3d(path.string(), recording.marker_names, recording.frame_rate, positions,
+  s2kf::c3d::write_c3d(path.string(), recording.labels, recording.rate_hz, recording.positions,
                        recording.visible);
 }
 
 void write_clean_csv(const std::string& path, const s2kf::sim::Recording& recording) {
   s2kf::io::write_file_atomically(path, [&](std::ostream& out) {
     out << "frame,time";
-    for (const auto& name : recording.marker_names)
+    for (const auto& name : recording.labels)
       out << "," << name << "_x," << name << "_y," << name << "_z";
     out << "\n";
     char buffer[64];
     for (Eigen::Index k = 0; k < recording.frames(); ++k) {
-      std::snprintf(buffer, sizeof buffer, "%ld,%.9g", static_cast<long>(k), recording.time(k));
+      std::snprintf(buffer, sizeof buffer, "%ld,%.9g", static_cast<long>(k), recording.time_s(k));
       out << buffer;
       const auto& clean = recording.clean[static_cast<std::size_t>(k)];
       for (Eigen::Index m = 0; m < clean.cols(); ++m)
@@ -120,7 +115,7 @@ void write_truth_csv(const std::string& path, const s2kf::sim::Recording& record
   for (Eigen::Index k = 0; k < recording.frames(); ++k) {
     const auto& pose = recording.truth[static_cast<std::size_t>(k)];
     table.frame.push_back(static_cast<long>(k));
-    table.time.push_back(recording.time(k));
+    table.time.push_back(recording.time_s(k));
     table.values.row(k).head<3>() = pose.root_position.transpose();
     table.values.row(k).segment<3>(3) = pose.root_rpy.transpose();
     table.values.row(k).tail(static_cast<Eigen::Index>(joint_names.size())) = pose.joints.transpose();
@@ -232,7 +227,7 @@ void run(const Settings& settings) {
   const double hidden = recording.hidden_fraction();
   std::printf("simulated '%s' (%s): %ld frames at %g Hz, %ld markers, subject %.0f mm, seed %llu\n",
               motion.name.c_str(), motion_file.string().c_str(), static_cast<long>(recording.frames()),
-              recording.frame_rate, static_cast<long>(recording.markers()), settings.height_mm,
+              recording.rate_hz, static_cast<long>(recording.markers()), settings.height_mm,
               static_cast<unsigned long long>(settings.seed));
   std::printf("hidden: %.1f %% of marker-frames (%.1f of %ld markers per frame on average)\n", 100.0 * hidden,
               hidden * static_cast<double>(recording.markers()), static_cast<long>(recording.markers()));

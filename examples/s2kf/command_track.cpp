@@ -1,21 +1,17 @@
 // `s2kf track`: stream C3D recordings through the S2KF tracker and write the motion as CSV, OpenSim
 // .mot, BVH, a JSON summary and a per-frame marker report.
-#include "calibration_hook.hpp"
 #include "command.hpp"
 #include "frame_figure.hpp"
 #include "marker_set_json.hpp"
-#include "subject_height.hpp"
+#include "tracker_samples.hpp"
 
-#include <s2kf/body/body_model.hpp>
-#include <s2kf/io/bvh.hpp>
-#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/body/pose.hpp>
+#include <s2kf/io/atomic_file.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
-#include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/track/tracker.hpp>
+#include <s2kf/track/session.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
-#include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/tracking_smoother.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
@@ -61,11 +57,8 @@ struct TrackSettings {
 /// 46-state posterior, TrackingSmoother::kBytesPerFrame, about 17 KB).
 constexpr double kSmoothingMemoryLimitBytes = 8e9;
 
-/// Frames left out of the accuracy against the truth (spec/evaluation.md: the filter's start-up).
+/// Frames left out of the accuracy against the truth (the filter's start-up).
 constexpr long kTruthWarmupFrames = 20;
-
-/// Coordinates beyond a kilometre are not a body: the file's units or scale must be wrong.
-constexpr double kAbsurdMm = 1e6;
 
 struct TrackOutcome {
   nlohmann::json summary;
@@ -92,24 +85,35 @@ void write_marker_report_row(std::ostream& out, long frame, double time, double 
   out << "," << visible_markers << "\n";
 }
 
-std::vector<std::string> recording_labels(const c3d::C3dInfo& info) {
-  std::vector<std::string> labels;
-  for (const c3d::PointLabel& label : info.labels)
-    labels.push_back(label.model_output ? std::string() : label.name);  // model outputs never match
-  return labels;
+/// The accuracy against a simulated recording's truth, as the summary's "truth" object.
+nlohmann::json truth_json(const track::TruthComparison& accuracy) {
+  return {{"frames_compared", accuracy.frames},
+          {"warmup_frames", kTruthWarmupFrames},
+          {"all_joint_rms_deg", accuracy.all_joint_rms_deg},
+          {"segment_orientation_rms_deg", accuracy.segment_orientation_rms_deg},
+          {"limb_flexion_rms_deg", accuracy.limb_flexion_rms_deg},
+          {"root_position_rms_mm", accuracy.root_position_rms_mm},
+          {"root_orientation_rms_deg", accuracy.root_orientation_rms_deg},
+          {"worst_joint", accuracy.worst_joint},
+          {"worst_joint_rms_deg", accuracy.worst_joint_rms_deg},
+          {"joint_limit_violations", accuracy.joint_limit_violations}};
 }
 
+nlohmann::json number_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+/// Tracks one recording through the library's pipeline (prepare a session, run it) into the
+/// output files; returns the summary and the paragraph to print.
 TrackOutcome track_file(const std::string& input, const std::string& prefix, const TrackSettings& settings,
                         bool show_progress) {
-  std::unique_ptr<c3d::C3dReader> reader;
+  std::unique_ptr<c3d::C3dFrameSource> source;
   try {
-    reader = std::make_unique<c3d::C3dReader>(input);
+    source = std::make_unique<c3d::C3dFrameSource>(input);
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
-  const c3d::C3dInfo& info = reader->info();
-  if (info.frame_count == 0) throw UserError(input + ": the recording holds no complete frame");
-  if (!(info.rate > 0)) throw UserError(input + ": the recording has no valid frame rate");
+  const c3d::C3dInfo& info = source->info();
   // Ground truth, read before tracking so a wrong file fails fast.
   std::optional<io::MotionTable> truth;
   if (!settings.truth.empty()) {
@@ -122,103 +126,55 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       throw UserError("--truth: " + settings.truth + " has " + std::to_string(truth->frames()) +
                       " rows, but " + input + " has " + std::to_string(info.frame_count) + " frames");
   }
-  const MarkerSetChoice choice =
-      choose_marker_set_for(recording_labels(info), settings.markerset, settings.subject);
-  body::BodyModel model = choice.model;
-  track::MarkerMapping mapping = choice.mapping;
-  for (const c3d::PointLabel& label : info.labels)
-    if (label.model_output) {
-      auto& ignored = mapping.ignored_labels;
-      std::replace(ignored.begin(), ignored.end(), std::string(), label.raw);
-    }
-  track::TrackerOptions options = track::preset_options(settings.preset, info.rate);
-  if (settings.samples > 0) options.samples = settings.samples;
-  apply_marker_noise(choice.set, options);
-  if (mapping.markers_used() == 0)
-    throw UserError(input + ": none of its " + std::to_string(info.point_count) +
-                    " point labels is a marker of the marker set " + choice.set.name +
-                    " (expected names such as LASI, RKNE, C7)");
-  if (mapping.markers_used() < options.min_markers_to_start)
-    throw UserError(input + ": only " + std::to_string(mapping.markers_used()) +
-                    " of its labels are markers of the marker set " + choice.set.name + "; at least " +
-                    std::to_string(options.min_markers_to_start) + " are needed to track");
   if (settings.smooth && static_cast<double>(info.frame_count) * track::TrackingSmoother::kBytesPerFrame >
                              kSmoothingMemoryLimitBytes)
     throw UserError(
         input + ": " + std::to_string(info.frame_count) + " frames are too many to smooth in memory (" +
         format(static_cast<double>(info.frame_count) * track::TrackingSmoother::kBytesPerFrame / 1e9, 1) +
         " GB); track without --smooth, or split the recording");
-
   if (settings.figure_frame >= info.frame_count)
     throw UserError(input + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
                     std::to_string(info.frame_count) + " frames (0-based)");
-  std::vector<std::string> warnings = info.warnings;
-  warnings.insert(warnings.end(), choice.warnings.begin(), choice.warnings.end());
-  std::optional<SubjectHeight> found = subject_height(*reader, choice, settings.height_mm, input);
-  if (!found) {
-    found = SubjectHeight{1750, "default (no two markers on one segment to estimate it from)"};
-    warnings.push_back("body height not estimable from the markers; 1750 mm assumed (use --height)");
-  }
-  const double height = found->mm;
-  const std::string height_source = found->source;
-  model = model.scaled(height);
 
-  // Subject calibration: marker offsets and bone lengths fitted on the recording's first frames.
-  nlohmann::json calibration_summary = nullptr;
-  bool calibrate = settings.calibrate && settings.subject.empty();
-  if (calibrate) {
-    try {
-      const track::SubjectCalibration calibration =
-          calibrate_recording(*reader, model, choice, options, info.rate,
-                              track::CalibrationOptions{}.iterations, settings.calibration_frames, false);
-      model = calibration.model;
-      calibration_summary = {
-          {"frames", std::min<std::int64_t>(settings.calibration_frames, info.frame_count)},
-          {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},
-          {"mean_marker_distance_after_mm", calibration.mean_marker_distance_after_mm},
-          {"segment_scale", calibration.segment_scale}};
-    } catch (const UserError& e) {
-      // Too few usable frames to fit a subject: track with the marker set as it is, and say so.
-      calibrate = false;
-      warnings.push_back(std::string("subject not calibrated (") + e.what() +
-                         "); the marker set is used as it is");
+  const MarkerSetChoice choice = choose_marker_set_for(source->labels(), settings.markerset, settings.subject);
+  track::SessionOptions session_options;
+  try {
+    session_options.tracker = track::preset_options(settings.preset, info.rate);
+  } catch (const std::invalid_argument& e) {
+    throw UserError(e.what());
+  }
+  if (settings.samples > 0) session_options.tracker.samples = settings.samples;
+  session_options.height_mm = settings.height_mm;
+  session_options.calibrate = settings.calibrate && settings.subject.empty();
+  session_options.calibration_frames = settings.calibration_frames;
+  const SampleSet samples = cached_sample_set(46, session_options.tracker.samples);
+  track::Session session;
+  try {
+    session = track::prepare_session(*source, choice.set, session_options, samples);
+  } catch (const std::invalid_argument& e) {
+    throw UserError(input + ": " + e.what());
+  }
+  // Model outputs never match a marker; the summary lists them under their names in the file.
+  for (const c3d::PointLabel& label : info.labels)
+    if (label.model_output) {
+      auto& ignored = session.mapping.ignored_labels;
+      std::replace(ignored.begin(), ignored.end(), std::string(), label.raw);
     }
-  }
-
-  std::unique_ptr<track::Tracker> s2kf_tracker;
-  std::unique_ptr<track::GradientBaseline> baseline;
-  std::unique_ptr<track::TrackingSmoother> smoother;
-  if (settings.method == "s2kf") {
-    s2kf_tracker = std::make_unique<track::Tracker>(model, mapping, options, info.rate);
-    if (settings.smooth) smoother = std::make_unique<track::TrackingSmoother>(*s2kf_tracker);
-  } else
-    baseline = std::make_unique<track::GradientBaseline>(model, mapping);
+  std::vector<std::string> warnings = info.warnings;
+  warnings.insert(warnings.end(), session.warnings.begin(), session.warnings.end());
+  const std::vector<std::string> messages = marker_set_messages(choice, session.mapping);
 
   const auto start = std::chrono::steady_clock::now();
   const double frame_period = 1.0 / info.rate;
   long deadline_misses = 0;
-  std::string bad_coordinates;
   c3d::Frame figure_points;  // the frame --figure draws, as recorded
-  auto next_frame = [&](c3d::Frame& frame) {
-    if (!bad_coordinates.empty() || !reader->read_frame(frame)) return false;
-    for (Eigen::Index p = 0; p < frame.positions.cols(); ++p)
-      if (frame.visible(p) && (frame.positions.col(p).cwiseAbs().maxCoeff() > kAbsurdMm)) {
-        std::ostringstream s;
-        s << input << ": frame " << frame.index << ", point " << info.labels[p].raw << " is at ("
-          << frame.positions.col(p).transpose()
-          << ") mm, beyond a kilometre: the file's units or scale are wrong";
-        bad_coordinates = s.str();
-        return false;
-      }
+  track::RunHooks hooks;
+  hooks.on_read = [&](const MarkerFrame& frame) {
     if (frame.index == settings.figure_frame) figure_points = frame;
-    if (settings.realtime) {
-      const auto due = start + std::chrono::duration<double>(static_cast<double>(frame.index) * frame_period);
-      std::this_thread::sleep_until(due);
-    }
-    return true;
+    if (settings.realtime)
+      std::this_thread::sleep_until(start + std::chrono::duration<double>(static_cast<double>(frame.index) * frame_period));
   };
-  auto on_frame = [&](long index) {
-    if (smoother) smoother->record(*s2kf_tracker, index);
+  hooks.on_frame = [&](long index) {
     if (settings.realtime) {
       const double late = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
                           (static_cast<double>(index) + 1) * frame_period;
@@ -233,58 +189,40 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                 << "/" << info.frame_count << std::flush;
     }
   };
-  // Outputs, each written completely or not at all: without --smooth every row goes to the files as
-  // it is tracked (memory stays constant however long the recording is); the smoother needs every
-  // frame, so with --smooth the table is kept and written after smoothing.
+  // Outputs, each written completely or not at all. Rows go to the files as they are produced:
+  // as tracked (memory stays constant however long the recording is), or after the backward pass
+  // with --smooth.
   const std::string name = fs::path(input).stem().string();
-  io::MotionStreamWriter motion_files({prefix + ".csv", prefix + ".mot", prefix + ".bvh"}, model, info.rate,
+  io::MotionStreamWriter motion_files({prefix + ".csv", prefix + ".mot", prefix + ".bvh"}, session.model, info.rate,
                                       name);
   io::AtomicFileWriter marker_report(prefix + "_markers.csv");
   write_marker_report_header(marker_report.stream());
   std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
-  track::FrameSink sink;
-  if (!smoother)
-    sink = [&](const track::TrackedFrame& f) {
-      motion_files.append(f.frame, f.time, f.values);
-      write_marker_report_row(marker_report.stream(), f.frame, f.time, f.estimate.mean_marker_distance,
-                              f.estimate.visible_markers);
-      if (f.frame == settings.figure_frame && io::is_tracked_row(f.values)) {
-        figure_pose.emplace();
-        figure_pose->root_position = f.values.head<3>();
-        figure_pose->root_rpy = f.values.segment<3>(3);
-        figure_pose->joints = f.values.tail(f.values.size() - 6);
-      }
-    };
-  const auto joint_names = model.joint_names();
-  track::TrackingRun run =
-      s2kf_tracker
-          ? track::run_tracking(*s2kf_tracker, next_frame, info.rate, joint_names, false, on_frame, sink)
-          : track::run_tracking(*baseline, next_frame, info.rate, joint_names, false, on_frame, sink);
+  hooks.sink = [&](const track::TrackedFrame& f) {
+    motion_files.append(f.frame, f.time, f.values);
+    write_marker_report_row(marker_report.stream(), f.frame, f.time, f.mean_marker_distance, f.visible_markers);
+    if (f.frame == settings.figure_frame && io::is_tracked_row(f.values)) figure_pose = body::pose_from_row(f.values);
+  };
+  track::RunOptions run_options;
+  run_options.method = settings.method == "s2kf" ? track::Method::s2kf : track::Method::baseline;
+  run_options.smooth = settings.smooth;
+  track::TrackingRun run;
+  try {
+    run = track::run_session(session, *source, samples, run_options, hooks);
+  } catch (const std::invalid_argument& e) {
+    throw UserError(input + ": " + e.what());
+  }
   if (show_progress) std::cerr << "\n";
-  if (!bad_coordinates.empty()) throw UserError(bad_coordinates);
   if (run.frames_tracked == 0)
-    throw UserError(input + ": no frame has the " + std::to_string(options.min_markers_to_start) +
+    throw UserError(input + ": no frame has the " + std::to_string(session.tracker.min_markers_to_start) +
                     " visible markers needed to start tracking");
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
-  if (smoother) {
-    smoother->smooth(run.motion);
-    for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {
-      const auto f = static_cast<std::size_t>(r);
-      motion_files.append(run.motion.frame[f], run.motion.time[f], run.motion.values.row(r).transpose());
-      write_marker_report_row(marker_report.stream(), run.motion.frame[f], run.motion.time[f],
-                              run.mean_marker_distance[f], run.visible_markers[f]);
-      if (run.motion.frame[f] == settings.figure_frame &&
-          io::is_tracked_row(run.motion.values.row(r).transpose()))
-        figure_pose = track::pose_of_row(run.motion, r);
-    }
-  }
   std::string figure_file;
   if (settings.figure_frame >= 0) {
     std::string problem;
     if (!figure_pose)
-      warnings.push_back("frame " + std::to_string(settings.figure_frame) +
-                         " was not tracked: no figure drawn");
-    else if (draw_tracked_frame(prefix, settings.figure_frame, model, mapping, *figure_pose,
+      warnings.push_back("frame " + std::to_string(settings.figure_frame) + " was not tracked: no figure drawn");
+    else if (draw_tracked_frame(prefix, settings.figure_frame, session.model, session.mapping, *figure_pose,
                                 figure_points.positions, figure_points.visible, problem))
       figure_file = prefix + "_frame" + std::to_string(settings.figure_frame) + ".png";
     else
@@ -293,26 +231,15 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
 
   const long converged = track::converged_frame(run.mean_marker_distance);
   const double level = track::mean_from(run.mean_marker_distance, converged);
-  // The convergence rule (spec/evaluation.md) restarts at any late frame above 1.5 times the final
-  // level, so on long real recordings the mean over every tracked frame is reported as well.
+  // The convergence rule restarts at any late frame above 1.5 times the final level, so on long
+  // real recordings the mean over every tracked frame is reported as well.
   const double overall = track::mean_from(run.mean_marker_distance, 0);
-  if (calibrate) {
-    // The calibration's distance with the calibrated subject, from this run: the tracker is causal,
-    // so its first frames are what a final calibration pass would track (s2kf calibrate's "after").
-    const auto& distance = run.mean_marker_distance;
-    const std::size_t end =
-        std::min<std::size_t>(distance.size(), static_cast<std::size_t>(settings.calibration_frames));
-    std::size_t first = 0;
-    while (first < end && !std::isfinite(distance[first])) ++first;
-    const std::size_t from =
-        std::min<std::size_t>(end, first + static_cast<std::size_t>(track::CalibrationOptions{}.skip_frames));
-    const double after =
-        track::mean_from(std::vector<double>(distance.begin() + static_cast<std::ptrdiff_t>(from),
-                                             distance.begin() + static_cast<std::ptrdiff_t>(end)),
-                         0);
-    calibration_summary["mean_marker_distance_after_mm"] =
-        std::isfinite(after) ? nlohmann::json(after) : nlohmann::json(nullptr);
-  }
+  nlohmann::json calibration_summary = nullptr;
+  if (session.calibration)
+    calibration_summary = {{"frames", session.calibration_frames},
+                           {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
+                           {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
+                           {"segment_scale", session.calibration->segment_scale}};
   std::vector<double>& latency_ms = run.seconds;  // not needed in seconds any more
   for (double& s : latency_ms) s *= 1000;
   const double median_ms = track::quantile(latency_ms, 0.5), p99_ms = track::quantile(latency_ms, 0.99);
@@ -320,69 +247,59 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   motion_files.finish();
   marker_report.commit();
   // Accuracy against the truth, from the motion as written (frames from the 20th on).
-  nlohmann::json truth_summary = nullptr;
   std::optional<track::TruthComparison> accuracy;
   if (truth) {
     try {
-      accuracy =
-          track::compare_with_truth(model, io::load_motion_csv(prefix + ".csv"), *truth, kTruthWarmupFrames);
+      accuracy = track::compare_with_truth(session.model, io::load_motion_csv(prefix + ".csv"), *truth,
+                                           kTruthWarmupFrames);
     } catch (const std::invalid_argument& e) {
       throw UserError("--truth: " + settings.truth + ": " + e.what());
     }
-    truth_summary = {{"frames_compared", accuracy->frames},
-                     {"warmup_frames", kTruthWarmupFrames},
-                     {"all_joint_rms_deg", accuracy->all_joint_rms_deg},
-                     {"segment_orientation_rms_deg", accuracy->segment_orientation_rms_deg},
-                     {"limb_flexion_rms_deg", accuracy->limb_flexion_rms_deg},
-                     {"root_position_rms_mm", accuracy->root_position_rms_mm},
-                     {"root_orientation_rms_deg", accuracy->root_orientation_rms_deg},
-                     {"worst_joint", accuracy->worst_joint},
-                     {"worst_joint_rms_deg", accuracy->worst_joint_rms_deg},
-                     {"joint_limit_violations", accuracy->joint_limit_violations}};
   }
   std::vector<std::string> markers_used;
-  for (int m = 0; m < model.marker_count(); ++m)
-    if (mapping.point_of_marker[m] >= 0) markers_used.push_back(model.markers[m].name);
+  for (int m = 0; m < session.model.marker_count(); ++m)
+    if (session.mapping.point_of_marker[m] >= 0) markers_used.push_back(session.model.markers[m].name);
+  const bool s2kf_method = run_options.method == track::Method::s2kf;
   nlohmann::json summary = {
       {"input", input},
       {"method", settings.method},
       {"marker_set", choice.set.name},
       {"marker_set_source", choice.source},
-      {"marker_set_messages", choice.messages},
+      {"marker_set_messages", messages},
       {"calibration", calibration_summary},
-      {"smoothed", smoother != nullptr},
-      {"preset", options.preset},
+      {"smoothed", settings.smooth},
+      {"preset", session.tracker.preset},
       {"frames", run.frames},
       {"frames_tracked", run.frames_tracked},
       {"rate", info.rate},
-      {"height_mm", height},
-      {"height_source", height_source},
+      {"height_mm", session.height_mm},
+      {"height_source", session.height_source},
       {"markers_used", markers_used},
-      {"labels_ignored", mapping.ignored_labels},
-      {"mean_marker_distance_mm", std::isfinite(level) ? nlohmann::json(level) : nlohmann::json(nullptr)},
+      {"labels_ignored", session.mapping.ignored_labels},
+      {"mean_marker_distance_mm", number_or_null(level)},
       {"converged_frame", converged},
-      {"mean_marker_distance_all_frames_mm",
-       std::isfinite(overall) ? nlohmann::json(overall) : nlohmann::json(nullptr)},
+      {"mean_marker_distance_all_frames_mm", number_or_null(overall)},
       {"latency_ms", {{"median", median_ms}, {"p99", p99_ms}}},
-      {"samples", settings.method == "s2kf" ? nlohmann::json(options.samples) : nlohmann::json(nullptr)},
+      {"samples", s2kf_method ? nlohmann::json(session.tracker.samples) : nlohmann::json(nullptr)},
       {"warnings", warnings},
   };
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
-  if (truth) summary["truth"] = truth_summary;
+  if (accuracy) summary["truth"] = truth_json(*accuracy);
   io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
 
   std::ostringstream paragraph;
-  for (const std::string& message : choice.messages) paragraph << message << "\n";
+  for (const std::string& message : messages) paragraph << message << "\n";
   paragraph << name << ": tracked " << run.frames_tracked << " of " << run.frames << " frames at "
             << format(info.rate, 0) << " Hz with " << markers_used.size() << " markers ("
-            << mapping.ignored_labels.size() << " labels ignored), body height " << format(height, 0)
-            << " mm (" << height_source << "), marker set " << choice.set.name;
+            << session.mapping.ignored_labels.size() << " labels ignored), body height "
+            << format(session.height_mm, 0) << " mm (" << session.height_source << "), marker set "
+            << choice.set.name;
   const auto millimetres = [](const nlohmann::json& value) {
     return value.is_number() && std::isfinite(value.get<double>()) ? format(value.get<double>(), 1)
                                                                    : std::string("n/a");
   };
-  if (calibrate)
-    paragraph << ", calibrated on " << calibration_summary["frames"].get<std::int64_t>() << " frames ("
+  if (session.calibration)
+    paragraph << ", calibrated on " << session.calibration_frames << " frames ("
               << millimetres(calibration_summary["mean_marker_distance_before_mm"]) << " -> "
               << millimetres(calibration_summary["mean_marker_distance_after_mm"]) << " mm)";
   if (std::isfinite(level))
@@ -393,9 +310,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
               << format(overall, 1) << " mm over all tracked frames";
   paragraph << ". Latency per frame: median " << format(median_ms, 3) << " ms, p99 " << format(p99_ms, 3)
             << " ms";
-  if (settings.method == "s2kf") paragraph << " (" << options.samples << " samples)";
+  if (s2kf_method) paragraph << " (" << session.tracker.samples << " samples)";
   paragraph << ".";
-  if (smoother) paragraph << " Motion smoothed (RTS); marker distances are the filter's.";
+  if (settings.smooth) paragraph << " Motion smoothed (RTS); marker distances are the filter's.";
   if (settings.realtime) paragraph << " Real-time pacing: " << deadline_misses << " deadline misses.";
   if (accuracy)
     paragraph << " Against the truth (frames " << kTruthWarmupFrames << " on): all-joint RMS "
@@ -403,8 +320,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
               << format(accuracy->segment_orientation_rms_deg, 2) << " deg, limb flexion "
               << format(accuracy->limb_flexion_rms_deg, 2) << " deg, root position "
               << format(accuracy->root_position_rms_mm, 1) << " mm.";
-  if (!warnings.empty())
-    paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
+  if (!warnings.empty()) paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
   paragraph << "\nWrote " << prefix << ".csv, .mot, .bvh, .json and _markers.csv";
   if (!figure_file.empty()) paragraph << ", and the figure " << figure_file;
   paragraph << ".";

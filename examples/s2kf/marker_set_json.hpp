@@ -186,15 +186,10 @@ inline body::MarkerSet resolve_marker_set(const std::string& name_or_file) {
                   "; or give a .json file)");
 }
 
-/// What `s2kf track` / `s2kf calibrate` track with: the set, the model built from it at the
-/// reference height (scale it to the subject's height), the mapping, and what to tell the user.
+/// Which marker set a recording is tracked with, and why.
 struct MarkerSetChoice {
   body::MarkerSet set;
-  body::BodyModel model;  ///< mmm_body_model at the set's reference height with the set applied
-  track::MarkerMapping mapping;
-  std::string source;                 ///< "given", "subject file" or "chosen automatically (...)"
-  std::vector<std::string> messages;  ///< one line each: which set, why, which labels were ignored
-  std::vector<std::string> warnings;  ///< observability warnings of the set
+  std::string source;  ///< "given", "subject file F" or "chosen automatically: ..."
 };
 
 inline std::string format_fraction(double value) {
@@ -230,50 +225,26 @@ inline MarkerSetChoice choose_marker_set_for(const std::vector<std::string>& lab
       why << " " << set.name << " " << format_fraction(body::marker_set_match(labels, set));
     choice.source = why.str();
   }
-  const body::BodyModel base = body::mmm_body_model(choice.set.reference_height_mm);
-  try {
-    choice.model = body::apply_marker_set(base, choice.set);
-  } catch (const std::invalid_argument& e) {
-    throw UserError(e.what());
-  }
-  choice.mapping = track::map_marker_set(labels, choice.set);
-  choice.warnings = body::marker_set_warnings(base, choice.model);
-  choice.messages.push_back("marker set " + choice.set.name + " (" + choice.source +
-                            "): " + std::to_string(choice.mapping.markers_used()) + " of its " +
-                            std::to_string(choice.set.entries.size()) + " markers are in the recording");
+  return choice;
+}
+
+/// What to tell the user about the choice once the session mapped the labels: which set, why, how
+/// many of its markers the recording has, which labels were ignored.
+inline std::vector<std::string> marker_set_messages(const MarkerSetChoice& choice,
+                                                    const track::MarkerMapping& mapping) {
+  std::vector<std::string> messages;
+  messages.push_back("marker set " + choice.set.name + " (" + choice.source +
+                     "): " + std::to_string(mapping.markers_used()) + " of its " +
+                     std::to_string(choice.set.entries.size()) + " markers are in the recording");
   std::vector<std::string> ignored;
-  for (const std::string& label : choice.mapping.ignored_labels)
+  for (const std::string& label : mapping.ignored_labels)
     if (!label.empty()) ignored.push_back(label);
   if (!ignored.empty()) {
     std::string list;
     for (const std::string& label : ignored) list += (list.empty() ? "" : ", ") + label;
-    choice.messages.push_back(std::to_string(ignored.size()) + " label(s) ignored: " + list);
+    messages.push_back(std::to_string(ignored.size()) + " label(s) ignored: " + list);
   }
-  return choice;
-}
-
-/// The per-marker weights for the calibration: the set's weight, times (tracker noise / marker
-/// noise)^2 where the set gives a marker its own noise.
-inline std::vector<double> calibration_weights(const body::MarkerSet& set, double tracker_noise_mm) {
-  std::vector<double> weights;
-  for (const body::MarkerSetEntry& entry : set.entries) {
-    double w = entry.weight;
-    if (entry.noise_mm) w *= (tracker_noise_mm * tracker_noise_mm) / (*entry.noise_mm * *entry.noise_mm);
-    weights.push_back(w);
-  }
-  return weights;
-}
-
-/// The tracker's per-marker noise from the set: each marker's `noise_mm`, NaN (the tracker's
-/// common noise) where the set gives none; left empty when no marker has its own.
-inline void apply_marker_noise(const body::MarkerSet& set, track::TrackerOptions& options) {
-  options.marker_noise_mm_per_marker.clear();
-  const bool any = std::any_of(set.entries.begin(), set.entries.end(),
-                               [](const body::MarkerSetEntry& entry) { return entry.noise_mm.has_value(); });
-  if (!any) return;
-  for (const body::MarkerSetEntry& entry : set.entries)
-    options.marker_noise_mm_per_marker.push_back(entry.noise_mm ? *entry.noise_mm
-                                                                : std::numeric_limits<double>::quiet_NaN());
+  return messages;
 }
 
 /// A calibrated subject as a marker set: explicit frames and offsets at the reference height

@@ -3,6 +3,8 @@
 /// is documented in docs/simulation.md; JSON stays out of the library, so this lives with the CLI.
 #pragma once
 
+#include <s2kf/core/constants.hpp>
+
 #include <s2kf/sim/keyframe_motion.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 
@@ -72,7 +74,7 @@ inline sim::KeyframeMotion motion_from_json(const nlohmann::json& document, cons
     fail("\"units\" must say \"deg\" or \"rad\" (the unit of root_rpy and the joint angles)");
   const std::string units = document["units"].get<std::string>();
   if (units != "deg" && units != "rad") fail("\"units\" must be \"deg\" or \"rad\", not \"" + units + "\"");
-  const double angle_scale = units == "deg" ? 3.14159265358979323846 / 180.0 : 1.0;
+  const double angle_scale = units == "deg" ? 1.0 / kDegreesPerRadian : 1.0;
   if (!document.contains("keyframes") || !document["keyframes"].is_array() || document["keyframes"].empty())
     fail("\"keyframes\" must be a non-empty array");
 

@@ -1,32 +1,64 @@
 /// @file
-/// Umbrella header: everything of s2kf (the estimation core, the body model, C3D and motion files,
-/// the simulator and the tracker). Include single headers to compile less.
+/// Umbrella header: every public header of s2kf (the estimation core, the body model, marker data
+/// and files, the simulator, the tracking pipeline). Include single headers to compile less.
 #pragma once
-
-#include <s2kf/core/chi_square.hpp>
-#include <s2kf/core/error.hpp>
-#include <s2kf/core/gaussian.hpp>
-#include <s2kf/core/lcd_distance.hpp>
-#include <s2kf/core/lcd_sample_set.hpp>
-#include <s2kf/core/sample_cache.hpp>
-#include <s2kf/core/sample_set.hpp>
-#include <s2kf/core/smart_sampling_kalman_filter.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/bounded_joints.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
+#include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/body/pose_columns.hpp>
+#include <s2kf/body/vector_sincos.hpp>
 
+#include <s2kf/core/box_muller.hpp>
+#include <s2kf/core/chi_square.hpp>
+#include <s2kf/core/compiled.hpp>
+#include <s2kf/core/constants.hpp>
+#include <s2kf/core/error.hpp>
+#include <s2kf/core/exponential_integral.hpp>
+#include <s2kf/core/gaussian.hpp>
+#include <s2kf/core/label_text.hpp>
+#include <s2kf/core/lcd_distance.hpp>
+#include <s2kf/core/lcd_sample_set.hpp>
+#include <s2kf/core/rts_smoother.hpp>
+#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/core/sample_set.hpp>
+#include <s2kf/core/smart_sampling_kalman_filter.hpp>
+
+#include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/bvh.hpp>
+#include <s2kf/io/c3d_error.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/c3d_writer.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
 
+#include <s2kf/sim/keyframe_motion.hpp>
+#include <s2kf/sim/monotone_cubic.hpp>
+#include <s2kf/sim/occlusion.hpp>
+#include <s2kf/sim/random.hpp>
+#include <s2kf/sim/random_sweep.hpp>
+#include <s2kf/sim/recording.hpp>
+#include <s2kf/sim/soft_tissue.hpp>
+#include <s2kf/sim/subject.hpp>
+
+#include <s2kf/track/evaluation.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/height_estimate.hpp>
+#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/track/rigid_fit.hpp>
+#include <s2kf/track/session.hpp>
+#include <s2kf/track/state_chart.hpp>
+#include <s2kf/track/subject_calibration.hpp>
 #include <s2kf/track/tracker.hpp>
+#include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/tracking_smoother.hpp>
 #include <s2kf/track/truth_metrics.hpp>

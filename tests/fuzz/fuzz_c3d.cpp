@@ -16,7 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const auto& info = reader.info();
     if (info.data_offset + info.frame_count * info.frame_bytes > static_cast<std::int64_t>(size))
       std::abort();
-    s2kf::c3d::Frame frame;
+    s2kf::MarkerFrame frame;
     for (int f = 0; f < 256 && reader.read_frame(frame); ++f)
       for (Eigen::Index p = 0; p < frame.positions.cols(); ++p)
         if (frame.visible(p) != frame.positions.col(p).allFinite()) std::abort();

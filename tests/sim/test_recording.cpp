@@ -56,7 +56,7 @@ TEST(Recording, WithoutPerturbationsTheMarkersAreTheModelsMarkersAtTheTruth) {
     const auto& pose = recording.truth[static_cast<std::size_t>(k)];
     const Eigen::Matrix3Xd expected = body::marker_positions(reference, pose);
     ASSERT_LT((recording.clean[static_cast<std::size_t>(k)] - expected).cwiseAbs().maxCoeff(), 1e-9) << k;
-    ASSERT_EQ(recording.measured[static_cast<std::size_t>(k)], recording.clean[static_cast<std::size_t>(k)]);
+    ASSERT_EQ(recording.frame(k), recording.clean[static_cast<std::size_t>(k)]);
   }
   // The root translation scales with the height: the handstand keyframes stand at z = 530 mm for
   // a 1000 mm subject.
@@ -69,7 +69,7 @@ TEST(Recording, TheTruthThroughTheSubjectsModelReproducesTheCleanMarkers) {
   for (Eigen::Index k = 0; k < recording.frames(); ++k) {
     const auto& pose = recording.truth[static_cast<std::size_t>(k)];
     const Eigen::Matrix3Xd reprojected =
-        body::marker_positions(model_at(subject, pose, recording.time(k)), pose);
+        body::marker_positions(model_at(subject, pose, recording.time_s(k)), pose);
     ASSERT_EQ(reprojected, recording.clean[static_cast<std::size_t>(k)]) << k;
   }
 }
@@ -83,7 +83,7 @@ TEST(Recording, SensorNoiseHasTheRequestedStandardDeviation) {
   long n = 0;
   for (Eigen::Index k = 0; k < recording.frames(); ++k) {
     const Eigen::Matrix3Xd error =
-        recording.measured[static_cast<std::size_t>(k)] - recording.clean[static_cast<std::size_t>(k)];
+        recording.frame(k) - recording.clean[static_cast<std::size_t>(k)];
     sum += error.sum();
     sum_squared += error.squaredNorm();
     n += error.size();
@@ -149,13 +149,10 @@ TEST(Recording, IsDeterminedByTheSeed) {
   };
   const Recording a = run(9), b = run(9), c = run(10);
   bool all_equal = true, any_different = false;
-  for (std::size_t k = 0; k < a.measured.size(); ++k) {
-    all_equal =
-        all_equal && a.measured[k].cwiseEqual(b.measured[k]).count() +
-                             (a.measured[k].array().isNaN() && b.measured[k].array().isNaN()).count() ==
-                         a.measured[k].size();
-    any_different = any_different || !(a.clean[k] == c.clean[k]);
-  }
+  all_equal = a.positions.cwiseEqual(b.positions).count() +
+                  (a.positions.array().isNaN() && b.positions.array().isNaN()).count() ==
+              a.positions.size();
+  for (std::size_t k = 0; k < a.clean.size(); ++k) any_different = any_different || !(a.clean[k] == c.clean[k]);
   EXPECT_TRUE(all_equal);
   EXPECT_TRUE((a.visible == b.visible).all());
   EXPECT_TRUE(any_different);
@@ -176,7 +173,7 @@ TEST(Recording, HiddenMarkersAreNaNAndPlannedLossesHideWhatTheySay) {
       const bool in_segment = std::find(forearm.begin(), forearm.end(), m) != forearm.end();
       const bool expected_visible = !blackout && !(dropout && in_segment);
       ASSERT_EQ(recording.visible(m, k), expected_visible) << "frame " << k << " marker " << m;
-      ASSERT_EQ(recording.measured[static_cast<std::size_t>(k)].col(m).array().isNaN().all(),
+      ASSERT_EQ(recording.frame(k).col(m).array().isNaN().all(),
                 !expected_visible);
     }
   }

@@ -12,6 +12,8 @@
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
+#include "tracker_samples.hpp"
+
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -51,7 +53,7 @@ Synthetic make_synthetic(Eigen::Index frames, double soft_tissue_mm, std::uint64
   options.frames = frames;
   s.recording = sim::simulate_recording(motion, s.subject, options, seed);
   for (Eigen::Index k = 0; k < frames; ++k) {
-    s.points.push_back(s.recording.measured[static_cast<std::size_t>(k)]);
+    s.points.push_back(s.recording.frame(k));
     s.visible.push_back(s.recording.visible.col(k));
   }
   return s;
@@ -145,16 +147,16 @@ track::TrackerOptions fast_options() {
 track::SubjectCalibration calibrate(const body::BodyModel& model, const Synthetic& s) {
   track::CalibrationOptions options;
   options.final_pass = false;
-  return track::calibrate_subject(model, track::map_markers(s.recording.marker_names, model.marker_names()),
-                                  fast_options(), 100.0, s.points, s.visible, options);
+  return track::calibrate_subject(model, track::map_markers(s.recording.labels, model.marker_names()),
+                                  fast_options(), s.recording, test::tracker_samples(fast_options()), options);
 }
 
 io::MotionTable track_all(const body::BodyModel& model, const Synthetic& s,
                           const track::TrackerOptions& options) {
-  const track::MarkerMapping mapping = track::map_markers(s.recording.marker_names, model.marker_names());
-  track::Tracker tracker(model, mapping, options, 100.0);
+  const track::MarkerMapping mapping = track::map_markers(s.recording.labels, model.marker_names());
+  track::Tracker tracker(model, mapping, options, 100.0, test::tracker_samples(options));
   std::size_t next = 0;
-  auto frames = [&](c3d::Frame& frame) {
+  auto frames = [&](MarkerFrame& frame) {
     if (next >= s.points.size()) return false;
     frame.index = static_cast<std::int64_t>(next);
     frame.positions = s.points[next];
@@ -175,7 +177,7 @@ io::MotionTable truth_table(const Synthetic& s, const body::BodyModel& model) {
     truth.values.row(k).segment<3>(3) = pose.root_rpy.transpose();
     truth.values.row(k).tail(model.joint_count()) = pose.joints.transpose();
     truth.frame.push_back(k);
-    truth.time.push_back(s.recording.time(k));
+    truth.time.push_back(s.recording.time_s(k));
   }
   return truth;
 }
@@ -187,7 +189,7 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
   const double height = 1830;
   const Synthetic s = make_synthetic(400, 0.0, 7, height);
   const body::BodyModel base = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(s.recording.marker_names, base.marker_names());
+  const track::MarkerMapping mapping = track::map_markers(s.recording.labels, base.marker_names());
   track::HeightEstimator estimator(base, mapping);
   for (std::size_t k = 0; k < s.points.size(); ++k) estimator.add_frame(s.points[k], s.visible[k]);
   ASSERT_TRUE(estimator.height_mm().has_value());
@@ -238,20 +240,23 @@ TEST(SubjectCalibration, LowersJointAngleErrorAndKeepsJointsInsideLimits) {
 TEST(SubjectCalibration, RejectsInputsThatCannotBeCalibrated) {
   const body::BodyModel model = body::mmm_body_model(1750);
   const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
-  const std::vector<Eigen::Matrix3Xd> none;
-  const std::vector<Eigen::Array<bool, Eigen::Dynamic, 1>> no_visibility;
-  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), 100.0, none, no_visibility),
-               std::invalid_argument);
+  const SampleSet& samples = test::tracker_samples(fast_options());
+  MarkerSequence none;
+  none.labels = model.marker_names();
+  none.rate_hz = 100;
+  none.resize(0);
+  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), none, samples), std::invalid_argument);
   track::CalibrationOptions options;
   options.iterations = 0;
-  const std::vector<Eigen::Matrix3Xd> one(1, body::marker_positions(model, body::Pose{}));
-  const std::vector<Eigen::Array<bool, Eigen::Dynamic, 1>> seen(
-      1, Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(model.marker_count(), true));
-  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), 100.0, one, seen, options),
+  MarkerSequence one = none;
+  one.resize(1);
+  one.set_frame(0, body::marker_positions(model, body::zero_pose(model)),
+                FrameVisibility::Constant(model.marker_count(), true));
+  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), one, samples, options),
                std::invalid_argument);
   track::MarkerMapping short_mapping = mapping;
   short_mapping.point_of_marker.pop_back();
-  EXPECT_THROW(track::calibrate_subject(model, short_mapping, fast_options(), 100.0, one, seen),
+  EXPECT_THROW(track::calibrate_subject(model, short_mapping, fast_options(), one, samples),
                std::invalid_argument);
 }
 
@@ -290,7 +295,8 @@ TEST(TrackerMarkerNoise, NoisyMarkerBarelyMovesTheEstimate) {
   track::TrackerOptions wrong = plain;
   wrong.marker_noise_mm_per_marker.assign(count - 1, 10.0);
   EXPECT_THROW(
-      track::Tracker(model, track::map_markers(s.recording.marker_names, model.marker_names()), wrong, 100.0),
+      track::Tracker(model, track::map_markers(s.recording.labels, model.marker_names()), wrong, 100.0,
+                     test::tracker_samples(wrong)),
       std::invalid_argument);
   wrong.marker_noise_mm_per_marker.assign(count, -1.0);
   EXPECT_THROW(wrong.validate(), std::invalid_argument);

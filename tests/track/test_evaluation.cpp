@@ -20,6 +20,8 @@
 
 #include "cli_runner.hpp"
 
+#include "tracker_samples.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -88,51 +90,48 @@ io::MotionTable truth_table(const sim::Recording& recording, const body::BodyMod
   for (Eigen::Index k = 0; k < recording.frames(); ++k) {
     const body::Pose& pose = recording.truth[static_cast<std::size_t>(k)];
     truth.frame.push_back(static_cast<long>(k));
-    truth.time.push_back(recording.time(k));
+    truth.time.push_back(recording.time_s(k));
     truth.values.row(k) << pose.root_position.transpose(), pose.root_rpy.transpose(), pose.joints.transpose();
   }
   return truth;
 }
 
-/// The simulated recording as the C3D reader would hand it over.
-c3d::Recording as_c3d(const sim::Recording& recording) {
-  c3d::Recording c;
-  c.info.rate = recording.frame_rate;
-  for (const std::string& name : recording.marker_names) {
-    c3d::PointLabel label;
-    label.name = label.raw = name;
-    c.info.labels.push_back(label);
-  }
-  c.info.point_count = static_cast<int>(recording.markers());
-  c.info.frame_count = recording.frames();
-  c.positions.resize(3 * recording.markers(), recording.frames());
-  for (Eigen::Index k = 0; k < recording.frames(); ++k)
-    c.positions.col(k) = recording.measured[static_cast<std::size_t>(k)].reshaped();
-  c.visible = recording.visible;
-  return c;
+/// The simulated recording as marker data (what the C3D reader would hand over).
+MarkerSequence as_c3d(const sim::Recording& recording) { return recording; }
+
+MarkerSequence bundled_handstand(Eigen::Index frames) {
+  const MarkerSequence all = c3d::read_c3d(data_file("handstand.c3d"));
+  return all.frames(0, std::min(frames, all.frame_count()));
 }
 
-c3d::Recording bundled_handstand(Eigen::Index frames) {
-  return track::first_frames(c3d::read_c3d(data_file("handstand.c3d")), frames);
+/// The evaluation's session: the model's own markers, the height given or estimated, no
+/// calibration (these tests compare the methods on the model as it is).
+track::Session evaluation_session(const MarkerSequence& recording, double height_mm = 0) {
+  SequenceFrameSource source(recording);
+  track::SessionOptions options;
+  options.height_mm = height_mm;
+  options.calibrate = false;
+  return track::prepare_session(source, body::model_marker_set(body::mmm_body_model(1000)), options,
+                                test::tracker_samples());
 }
 
 TEST(GradientBaseline, ConvergesToTheTruthOnExactFrames) {
   const sim::Recording recording = exact_handstand(60, 1750);
   const body::BodyModel model = body::mmm_body_model(1000).scaled(1750);
-  const track::MarkerMapping mapping = track::map_markers(recording.marker_names, model.marker_names());
+  const track::MarkerMapping mapping = track::map_markers(recording.labels, model.marker_names());
   track::GradientBaseline baseline(model, mapping);
   Eigen::Index f = 0;
-  auto next = [&](c3d::Frame& frame) {
+  auto next = [&](MarkerFrame& frame) {
     if (f >= recording.frames()) return false;
     frame.index = f;
-    frame.positions = recording.measured[static_cast<std::size_t>(f)];
+    frame.positions = recording.frame(f);
     frame.visible = recording.visible.col(f);
     ++f;
     return true;
   };
   int most_iterations = 0;
   const track::TrackingRun run =
-      track::run_tracking(baseline, next, recording.frame_rate, model.joint_names(), false, [&](long index) {
+      track::run_tracking(baseline, next, recording.rate_hz, model.joint_names(), false, [&](long index) {
         if (index > 0) most_iterations = std::max(most_iterations, baseline.last_iterations());
       });
   for (double d : run.mean_marker_distance) EXPECT_LT(d, 0.05);  // mm, every frame, the first included
@@ -146,8 +145,8 @@ TEST(GradientBaseline, ConvergesToTheTruthOnExactFrames) {
   EXPECT_LE(most_iterations, 15);
 
   // The evaluation's path (setup from the labels, the given height) gives the same fit.
-  const c3d::Recording c3d_recording = as_c3d(recording);
-  const track::EvaluationSetup setup = track::prepare_evaluation(c3d_recording, 1750);
+  const MarkerSequence c3d_recording = as_c3d(recording);
+  const track::Session setup = evaluation_session(c3d_recording, 1750);
   const io::MotionTable truth_motion = truth_table(recording, model);
   const track::MethodResult evaluated =
       track::evaluate_method(setup, c3d_recording, track::Method::baseline, 0, &truth_motion, 0);
@@ -212,8 +211,8 @@ TEST(GradientBaseline, StaysOnTheLimitWhenTheMarkersAskForMore) {
 }
 
 TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
-  const c3d::Recording recording = bundled_handstand(60);
-  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  const MarkerSequence recording = bundled_handstand(60);
+  const track::Session setup = evaluation_session(recording);
   const io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
   track::check_truth(truth, setup, 60);
   const track::MethodResult s2kf =
@@ -223,7 +222,7 @@ TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
 
   // The same trackers run by hand through run_tracking.
   Eigen::Index f = 0;
-  auto next = [&](c3d::Frame& frame) {
+  auto next = [&](MarkerFrame& frame) {
     if (f >= recording.frame_count()) return false;
     frame.index = f;
     frame.positions = recording.frame(f);
@@ -233,13 +232,12 @@ TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
   };
   track::TrackerOptions options;
   options.samples = 93;
-  track::Tracker tracker(setup.model, setup.mapping, options, recording.info.rate);
-  const track::TrackingRun by_hand =
-      track::run_tracking(tracker, next, recording.info.rate, setup.model.joint_names());
+  track::Tracker tracker(setup.model, setup.mapping, options, recording.rate_hz, test::tracker_samples(options));
+  const track::TrackingRun by_hand = track::run_tracking(tracker, next, recording.rate_hz, setup.model.joint_names());
   f = 0;
   track::GradientBaseline gradient(setup.model, setup.mapping);
   const track::TrackingRun by_hand_baseline =
-      track::run_tracking(gradient, next, recording.info.rate, setup.model.joint_names());
+      track::run_tracking(gradient, next, recording.rate_hz, setup.model.joint_names());
 
   ASSERT_EQ(s2kf.run.mean_marker_distance.size(), 60u);
   for (std::size_t k = 0; k < 60; ++k) {
@@ -262,8 +260,8 @@ TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
 }
 
 TEST(Evaluation, OcclusionStudyHidesWhatTheProcessHidesAndMeasuresAgainstAllMarkers) {
-  const c3d::Recording recording = bundled_handstand(60);
-  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  const MarkerSequence recording = bundled_handstand(60);
+  const track::Session setup = evaluation_session(recording);
   track::OcclusionOptions options;
   options.runs = 2;
   options.samples = 93;
@@ -323,8 +321,8 @@ TEST(Evaluation, DistanceAgainstAllMarkersCountsHiddenOnes) {
 }
 
 TEST(Evaluation, SampleSweepRunsEachCount) {
-  const c3d::Recording recording = bundled_handstand(20);
-  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  const MarkerSequence recording = bundled_handstand(20);
+  const track::Session setup = evaluation_session(recording);
   const auto sweep = track::sample_sweep(setup, recording, {93, 101}, nullptr, 5);
   ASSERT_EQ(sweep.size(), 2u);
   EXPECT_EQ(sweep[0].samples, 93);
@@ -334,8 +332,8 @@ TEST(Evaluation, SampleSweepRunsEachCount) {
 }
 
 TEST(Evaluation, TruthThatDoesNotFitIsRejected) {
-  const c3d::Recording recording = bundled_handstand(10);
-  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  const MarkerSequence recording = bundled_handstand(10);
+  const track::Session setup = evaluation_session(recording);
   io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 10);
   EXPECT_NO_THROW(track::check_truth(truth, setup, 10));
   EXPECT_THROW(track::check_truth(truth, setup, 11), std::invalid_argument);
@@ -366,8 +364,8 @@ TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
   EXPECT_EQ(hidden.substr(0, hidden.find('\n')), "frame,time,run1,run2,mean");
 
   // The numbers are the library's for the same input.
-  const c3d::Recording recording = bundled_handstand(60);
-  const track::EvaluationSetup setup = track::prepare_evaluation(recording);
+  const MarkerSequence recording = bundled_handstand(60);
+  const track::Session setup = evaluation_session(recording);
   const io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
   const track::MethodResult s2kf =
       track::evaluate_method(setup, recording, track::Method::s2kf, 93, &truth, 20);

@@ -11,6 +11,8 @@
 #include <s2kf/track/tracking_smoother.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
+#include "tracker_samples.hpp"
+
 #include <gtest/gtest.h>
 
 #include <string>
@@ -38,11 +40,11 @@ Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0) {
   for (Eigen::Index f = 0; f < recording.frame_count(); f += 5)
     heights.add_frame(recording.frame(f), recording.visible.col(f));
   model = model.scaled(heights.height_mm().value_or(1750));
-  track::Tracker tracker(model, mapping, track::TrackerOptions{}, recording.info.rate);
+  track::Tracker tracker(model, mapping, track::TrackerOptions{}, recording.info.rate, test::tracker_samples());
   track::TrackingSmoother smoother(tracker);
   const Eigen::Index end = frames > 0 ? std::min(frames, recording.frame_count()) : recording.frame_count();
   Eigen::Index f = 0;
-  auto next = [&](c3d::Frame& frame) {
+  auto next = [&](MarkerFrame& frame) {
     if (f >= end) return false;
     frame.index = f;
     frame.positions = recording.frame(f);
@@ -112,7 +114,7 @@ TEST(TrackingSmoother, StaysOnTheCartwheelThroughPitchNinetyDegrees) {
 TEST(TrackingSmoother, RejectsFramesThatAreNotConsecutive) {
   body::BodyModel model = body::mmm_body_model(1750);
   const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
-  track::Tracker tracker(model, mapping, track::TrackerOptions{}, 100);
+  track::Tracker tracker(model, mapping, track::TrackerOptions{}, 100, test::tracker_samples());
   track::TrackingSmoother smoother(tracker);
   smoother.record(tracker, 0);  // not tracked yet: nothing kept
   EXPECT_EQ(smoother.frames(), 0u);

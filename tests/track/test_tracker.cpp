@@ -19,6 +19,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tracker_samples.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
@@ -93,10 +95,10 @@ Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& 
   result.height_mm = heights.height_mm().value_or(1750);
   model = model.scaled(result.height_mm);
   result.model = model;
-  track::Tracker tracker(model, mapping, options, recording.info.rate);
+  track::Tracker tracker(model, mapping, options, recording.info.rate, test::tracker_samples(options));
   const Eigen::Index end = frames > 0 ? std::min(frames, recording.frame_count()) : recording.frame_count();
   Eigen::Index f = 0;
-  auto next = [&](c3d::Frame& frame) {
+  auto next = [&](MarkerFrame& frame) {
     if (f >= end) return false;
     frame.index = f;
     frame.positions = recording.frame(f);
@@ -246,19 +248,19 @@ TEST(Tracker, RejectsOptionsAndMappingsThatCannotWork) {
   const body::BodyModel model = body::mmm_body_model(1750);
   track::MarkerMapping none;
   none.point_of_marker.assign(model.marker_count(), -1);
-  EXPECT_THROW(track::Tracker(model, none, {}, 100), std::invalid_argument);
+  EXPECT_THROW(track::Tracker(model, none, {}, 100, test::tracker_samples()), std::invalid_argument);
   track::TrackerOptions bad;
   bad.marker_noise_mm = -1;
   const auto mapping = track::map_markers(model.marker_names(), model.marker_names());
-  EXPECT_THROW(track::Tracker(model, mapping, bad, 100), std::invalid_argument);
-  EXPECT_THROW(track::Tracker(model, mapping, {}, 0), std::invalid_argument);
+  EXPECT_THROW(track::Tracker(model, mapping, bad, 100, test::tracker_samples()), std::invalid_argument);
+  EXPECT_THROW(track::Tracker(model, mapping, {}, 0, test::tracker_samples()), std::invalid_argument);
   EXPECT_THROW(track::preset_options("fast", 100), std::invalid_argument);
 }
 
 TEST(Tracker, FramesBeforeEnoughMarkersAreReportedAsNotTracked) {
   const body::BodyModel model = body::mmm_body_model(1750);
   const auto mapping = track::map_markers(model.marker_names(), model.marker_names());
-  track::Tracker tracker(model, mapping, {}, 100);
+  track::Tracker tracker(model, mapping, {}, 100, test::tracker_samples());
   const Eigen::Matrix3Xd zero = body::marker_positions(model, body::Pose{});
   Eigen::Array<bool, Eigen::Dynamic, 1> visible = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(50, false);
   visible.head(5) = true;
@@ -613,7 +615,7 @@ struct ScriptedTracker {
 TEST(TrackingRun, ASinkGetsEveryRowAndTheRunKeepsNoTable) {
   const body::BodyModel model = body::mmm_body_model(1750);
   auto frames = [](long count) {
-    return [count, f = 0L](c3d::Frame& frame) mutable {
+    return [count, f = 0L](MarkerFrame& frame) mutable {
       frame.index = f;
       return f++ < count;
     };
@@ -631,7 +633,7 @@ TEST(TrackingRun, ASinkGetsEveryRowAndTheRunKeepsNoTable) {
         rows.values.row(f.index) = f.values.transpose();
         rows.frame.push_back(f.frame);
         rows.time.push_back(f.time);
-        visible.push_back(f.estimate.visible_markers);
+        visible.push_back(f.visible_markers);
       });
   EXPECT_EQ(kept.frames, 6);
   EXPECT_EQ(kept.frames_tracked, 4);
@@ -672,7 +674,7 @@ TEST(MotionStreamWriter, AnAbandonedWriterLeavesNoTargetAndNoTemporary) {
     io::MotionStreamWriter writer(paths, model, 100, "x");
     ScriptedTracker tracker;
     long f = 0;
-    auto frames = [&](c3d::Frame& frame) {
+    auto frames = [&](MarkerFrame& frame) {
       if (f == 5) throw std::runtime_error("the file ends inside frame 5");
       frame.index = f++;
       return true;

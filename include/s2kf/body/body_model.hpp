@@ -157,7 +157,7 @@ struct BodyModel {
 
 namespace mmm {
 
-/// One row of the joint table of docs/body-model.md (spec/body-model.md): lengths in mm for a
+/// One row of the joint table of docs/body-model.md: lengths in mm for a
 /// 1000 mm subject. `parent_group` is set on the first DoF of a group only ("root" or the group it
 /// hangs from); later DoFs of the group (parent_group == nullptr) chain onto the previous DoF.
 struct JointRow {

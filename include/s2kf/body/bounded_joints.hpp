@@ -23,6 +23,16 @@ namespace s2kf::body {
 /// Non-finite parameters: sin(NaN) and sin(+-inf) are NaN, so a movable joint's angle is NaN. That
 /// is deliberate: the filter then reports non_finite_model_output instead of silently tracking a
 /// broken state. Every finite Theta (1e6, -1e9, ...) gives an angle within [lower, upper].
+///
+/// The map itself, from sin(Theta): (u - l)/2 sin(Theta) + (u + l)/2, clamped to [l, u] once more so
+/// rounding never leaves the range (NaN passes through). Every user of the map calls this one
+/// function (the batched measurement model with sines it computed in bulk).
+inline double bounded_angle_from_sine(double sine, double lower, double upper) {
+  if (upper == lower) return lower;
+  const double v = 0.5 * (upper - lower) * sine + 0.5 * (upper + lower);
+  return v < lower ? lower : (v > upper ? upper : v);
+}
+
 struct BoundedJoints {
   Eigen::ArrayXd lower, upper;  ///< rad
 
@@ -41,17 +51,16 @@ struct BoundedJoints {
   Eigen::ArrayXd half_range() const { return 0.5 * (upper - lower); }
   Eigen::ArrayXd middle() const { return 0.5 * (upper + lower); }
 
-  /// theta = (u - l)/2 sin(Theta) + (u + l)/2, clamped once more so rounding never leaves the range
-  /// (std::clamp passes NaN through).
+  /// theta of joint j for its parameter Theta (bounded_angle_from_sine).
+  double angle(Eigen::Index j, double parameter) const {
+    return bounded_angle_from_sine(std::sin(parameter), lower(j), upper(j));
+  }
+
+  /// theta for every joint.
   Eigen::VectorXd angles(const Eigen::Ref<const Eigen::VectorXd>& parameters) const {
     check(parameters.size(), "angles");
     Eigen::VectorXd theta(size());
-    for (Eigen::Index j = 0; j < size(); ++j) {
-      const double half = 0.5 * (upper(j) - lower(j));
-      theta(j) = half == 0 ? lower(j)
-                           : std::clamp(half * std::sin(parameters(j)) + 0.5 * (upper(j) + lower(j)),
-                                        lower(j), upper(j));
-    }
+    for (Eigen::Index j = 0; j < size(); ++j) theta(j) = angle(j, parameters(j));
     return theta;
   }
 

@@ -84,7 +84,6 @@ class MarkerMeasurementModel {
   /// The pose a state stands for (joint angles through the bounded map).
   Pose pose(const Eigen::Ref<const Eigen::VectorXd>& state) const {
     check_state_size(state.size(), "pose");
-    detail::check_joint_count(model_, kJointCount, "MarkerMeasurementModel::pose");
     Pose result;
     result.root_position = state.head<3>();
     result.root_rpy = orientation_ == OrientationParameterization::roll_pitch_yaw
@@ -96,7 +95,7 @@ class MarkerMeasurementModel {
 
   /// A state that stands for `pose` (Theta on the principal branch; delta = Log(R_ref^T R)).
   Eigen::VectorXd state(const Pose& pose) const {
-    detail::check_joint_count(model_, kJointCount, "MarkerMeasurementModel::state");
+    detail::check_joint_count(model_, pose.joints.size(), "MarkerMeasurementModel::state");
     Eigen::VectorXd x(state_dimension());
     x.head<3>() = pose.root_position;
     x.segment<3>(3) = orientation_ == OrientationParameterization::roll_pitch_yaw
@@ -207,22 +206,18 @@ class MarkerMeasurementModel {
       }
   }
 
-  // theta = (u - l)/2 sin(Theta) + (u + l)/2 within [l, u] (NaN passes), then sin and cos of theta.
+  // theta = bounded_angle_from_sine(sin Theta) per sample, then sin and cos of theta.
   void stage_joint_angles(Eigen::Index n) {
     for (int j = 0; j < model_.joint_count(); ++j) {
       double* q = ws_.array(ws_.angles, j);
       double* s = ws_.array(ws_.sin_q, j);
       double* c = ws_.array(ws_.cos_q, j);
       const double lower = joints_.lower(j), upper = joints_.upper(j);
-      const double half = 0.5 * (upper - lower), middle = 0.5 * (upper + lower);
-      if (half == 0) {
+      if (upper == lower) {
         std::fill(q, q + n, lower);
       } else {
         vector_sincos(q, s, c, n);
-        for (Eigen::Index i = 0; i < n; ++i) {
-          const double v = half * s[i] + middle;
-          q[i] = v < lower ? lower : (v > upper ? upper : v);
-        }
+        for (Eigen::Index i = 0; i < n; ++i) q[i] = bounded_angle_from_sine(s[i], lower, upper);
       }
       vector_sincos(q, s, c, n);
     }

@@ -7,6 +7,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/label_text.hpp>
 
 #include <Eigen/Core>
 
@@ -56,6 +57,23 @@ struct MarkerSet {
   }
 };
 
+/// The base model's own markers as a marker set (labels = marker names, each `like` itself): what a
+/// recording labelled with the model's names (KIT's set, the simulator's) is tracked with when no
+/// marker-set file is at hand.
+inline MarkerSet model_marker_set(const BodyModel& base, std::string name = "model") {
+  MarkerSet set;
+  set.name = std::move(name);
+  set.description = "the body model's own markers";
+  set.reference_height_mm = base.height_mm;
+  for (const Marker& marker : base.markers) {
+    MarkerSetEntry entry;
+    entry.label = marker.name;
+    entry.like = marker.name;
+    set.entries.push_back(entry);
+  }
+  return set;
+}
+
 /// The segment a frame belongs to: "root" for frame 0, else its joint's group.
 inline std::string segment_of_frame(const BodyModel& model, int frame) {
   return frame == 0 ? std::string("root") : model.joints.at(static_cast<std::size_t>(frame - 1)).group;
@@ -69,13 +87,6 @@ inline std::string marker_set_frame_name(const BodyModel& model, int frame) {
   return model.frame_index(group) == frame ? group : model.frame_name(frame);
 }
 
-namespace detail {
-inline std::string upper_case(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-  return text;
-}
-}  // namespace detail
 
 /// Throws std::invalid_argument for a set that cannot be applied to `base`: no entries, an empty
 /// label, a label (or alias) used twice (case-insensitive), an unknown frame, segment or `like`
@@ -93,7 +104,7 @@ inline void validate_marker_set(const BodyModel& base, const MarkerSet& set) {
     std::vector<std::string> names{entry.label};
     names.insert(names.end(), entry.aliases.begin(), entry.aliases.end());
     for (const std::string& name : names) {
-      const auto [it, inserted] = seen.emplace(detail::upper_case(name), entry.label);
+      const auto [it, inserted] = seen.emplace(upper_case(name), entry.label);
       if (!inserted)
         throw std::invalid_argument(where + ": the label " + name + " is mapped twice (markers " +
                                     it->second + " and " + entry.label + ")");
@@ -195,17 +206,13 @@ inline double marker_set_match(const std::vector<std::string>& recording_labels,
   if (set.entries.empty()) return 0.0;
   std::vector<std::string> present;
   for (const std::string& label : recording_labels) {
-    const auto colon = label.rfind(':');
-    std::string name = colon == std::string::npos ? label : label.substr(colon + 1);
-    name.erase(0, name.find_first_not_of(" \t\r\n"));
-    name.erase(name.find_last_not_of(" \t\r\n") + 1);
-    present.push_back(detail::upper_case(name));
+    present.push_back(upper_case(strip_subject_prefix(label)));
   }
   int matched = 0;
   for (const MarkerSetEntry& entry : set.entries) {
-    bool found = std::find(present.begin(), present.end(), detail::upper_case(entry.label)) != present.end();
+    bool found = std::find(present.begin(), present.end(), upper_case(entry.label)) != present.end();
     for (const std::string& alias : entry.aliases)
-      found = found || std::find(present.begin(), present.end(), detail::upper_case(alias)) != present.end();
+      found = found || std::find(present.begin(), present.end(), upper_case(alias)) != present.end();
     matched += found;
   }
   return static_cast<double>(matched) / static_cast<double>(set.entries.size());

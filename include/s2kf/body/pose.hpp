@@ -9,6 +9,8 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace s2kf::body {
 
@@ -66,13 +68,57 @@ inline Eigen::Vector3d rotation_log(const Eigen::Matrix3d& r) {
   return angle_axis.angle() * angle_axis.axis();
 }
 
-/// A whole-body pose: the root (pelvis) frame in the lab and the 40 joint angles in state order.
+/// A whole-body pose: the root (pelvis) frame in the lab and the joint angles in state order. The
+/// joint vector is sized by the model it belongs to (40 zeros by default, the MMM model's count);
+/// forward kinematics refuses a pose whose size is not its model's joint count.
 struct Pose {
-  Eigen::Vector3d root_position = Eigen::Vector3d::Zero();  ///< mm, lab frame
-  Eigen::Vector3d root_rpy = Eigen::Vector3d::Zero();       ///< roll, pitch, yaw (rad)
-  Eigen::Matrix<double, kJointCount, 1> joints = Eigen::Matrix<double, kJointCount, 1>::Zero();  ///< rad
+  Eigen::Vector3d root_position = Eigen::Vector3d::Zero();      ///< mm, lab frame
+  Eigen::Vector3d root_rpy = Eigen::Vector3d::Zero();           ///< roll, pitch, yaw (rad)
+  Eigen::VectorXd joints = Eigen::VectorXd::Zero(kJointCount);  ///< rad
 
   Eigen::Matrix3d root_rotation() const { return rotation_from_rpy(root_rpy); }
 };
+
+/// The zero pose of a model: root at the origin, every joint angle 0.
+inline Pose zero_pose(const BodyModel& model) {
+  Pose pose;
+  pose.joints = Eigen::VectorXd::Zero(model.joint_count());
+  return pose;
+}
+
+/// Number of values of a pose row before the joints: root position (3) and roll, pitch, yaw (3).
+inline constexpr int kRootValues = 6;
+
+/// A pose as one row of a motion table: root_x, root_y, root_z (mm), roll, pitch, yaw (rad), joints.
+template <typename Row>
+void write_pose_row(const Pose& pose, Row&& row) {
+  row.template head<3>() = pose.root_position;
+  row.template segment<3>(3) = pose.root_rpy;
+  row.tail(row.size() - kRootValues) = pose.joints;
+}
+
+inline Eigen::VectorXd pose_row(const Pose& pose) {
+  Eigen::VectorXd row(kRootValues + pose.joints.size());
+  write_pose_row(pose, row);
+  return row;
+}
+
+/// The pose of a motion-table row (the inverse of pose_row).
+inline Pose pose_from_row(const Eigen::Ref<const Eigen::VectorXd>& row) {
+  Pose pose;
+  pose.root_position = row.head<3>();
+  pose.root_rpy = row.segment<3>(3);
+  pose.joints = row.tail(row.size() - kRootValues);
+  return pose;
+}
+
+/// The column names of a pose table (CSV) with these joints: frame, time (s), root_x, root_y,
+/// root_z (mm), root_roll, root_pitch, root_yaw (rad, R = Rz Ry Rx), then the joint angles (rad).
+inline std::vector<std::string> pose_column_names(const std::vector<std::string>& joint_names) {
+  std::vector<std::string> names{"frame",  "time",      "root_x",     "root_y",
+                                 "root_z", "root_roll", "root_pitch", "root_yaw"};
+  names.insert(names.end(), joint_names.begin(), joint_names.end());
+  return names;
+}
 
 }  // namespace s2kf::body

@@ -4,27 +4,23 @@
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/body/pose.hpp>
 
 #include <string>
 #include <vector>
 
 namespace s2kf::body {
 
-/// frame, time (s), root_x, root_y, root_z (mm), root_roll, root_pitch, root_yaw (rad, R = Rz Ry Rx),
-/// then the joint angles (rad) under the model's joint names in state order.
+/// The pose columns of `model`'s CSV (pose_column_names with its joint names).
 inline std::vector<std::string> pose_column_names(const BodyModel& model) {
-  std::vector<std::string> names{"frame",  "time",      "root_x",     "root_y",
-                                 "root_z", "root_roll", "root_pitch", "root_yaw"};
-  for (const Joint& joint : model.joints) names.push_back(joint.name);
-  return names;
+  return pose_column_names(model.joint_names());
 }
 
 /// The pose columns of the 40-joint MMM-style model.
 inline std::vector<std::string> pose_column_names() {
-  std::vector<std::string> names{"frame",  "time",      "root_x",     "root_y",
-                                 "root_z", "root_roll", "root_pitch", "root_yaw"};
-  for (const mmm::JointRow& row : mmm::kJointTable) names.emplace_back(row.name);
-  return names;
+  std::vector<std::string> joints;
+  for (const mmm::JointRow& row : mmm::kJointTable) joints.emplace_back(row.name);
+  return pose_column_names(joints);
 }
 
 }  // namespace s2kf::body

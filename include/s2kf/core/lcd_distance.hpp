@@ -4,6 +4,8 @@
 /// half-sample form {+s_k, -s_k} (+ origin) that the S2KF optimises.
 #pragma once
 
+#include <s2kf/core/constants.hpp>
+
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/exponential_integral.hpp>
 
@@ -44,7 +46,7 @@ namespace detail {
 inline void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
   nodes.assign(static_cast<std::size_t>(n), 0.0);
   weights.assign(static_cast<std::size_t>(n), 0.0);
-  const double pi = 3.14159265358979323846264338327950288;
+  const double pi = kPi;
   for (int i = 0; i < (n + 1) / 2; ++i) {
     double x = std::cos(pi * (i + 0.75) / (n + 0.5));
     double derivative = 0.0;

@@ -4,6 +4,8 @@
 /// moment-corrected to exact zero mean and identity covariance.
 #pragma once
 
+#include <s2kf/core/box_muller.hpp>
+
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/lcd_distance.hpp>
 #include <s2kf/core/sample_set.hpp>
@@ -240,11 +242,10 @@ class BoxMuller {
     // u1 in (0, 1] so that log(u1) is finite; 53 random bits each.
     const double u1 = (static_cast<double>(engine_() >> 11) + 1.0) * 0x1.0p-53;
     const double u2 = static_cast<double>(engine_() >> 11) * 0x1.0p-53;
-    const double radius = std::sqrt(-2.0 * std::log(u1));
-    const double angle = 6.283185307179586476925286766559 * u2;
-    spare_ = radius * std::sin(angle);
+    const auto [first, second] = box_muller(u1, u2);
+    spare_ = second;
     has_spare_ = true;
-    return radius * std::cos(angle);
+    return first;
   }
 
  private:

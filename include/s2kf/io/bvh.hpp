@@ -3,6 +3,8 @@
 /// MotionBuilder and most animation tools open.
 #pragma once
 
+#include <s2kf/core/constants.hpp>
+
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/motion_files.hpp>
@@ -103,7 +105,7 @@ class BvhSkeleton {
   /// One frame line: the root's 6 channels, then 3 per joint group (fixed, 4 decimals). `values`
   /// must be finite (BVH has no missing frames: write_bvh repeats a tracked row instead).
   void write_row(std::ostream& out, const MotionRowRef& values) const {
-    const double degrees = 180.0 / 3.14159265358979323846;
+    const double degrees = kDegreesPerRadian;
     const Eigen::Vector3d position = to_bvh(values.head<3>());
     out << std::fixed << std::setprecision(4) << position.x() << " " << position.y() << " " << position.z()
         << " " << values(5) * degrees << " " << -values(4) * degrees << " " << values(3) * degrees;

@@ -1,7 +1,7 @@
 /// @file
 /// Reading C3D motion capture files from Intel, DEC and MIPS writers, integer or float storage,
-/// as a stream of frames with constant memory or as a whole recording. The reader follows
-/// /work/shared/spec/c3d.md: it survives the damaged and inconsistent files real systems write and
+/// as a stream of frames with constant memory or as a whole recording. It survives the damaged and
+/// inconsistent files real systems write (docs/c3d.md lists the traps it handles) and
 /// reports what it had to work around as warnings; only a file it cannot read at all throws C3dError.
 #pragma once
 
@@ -26,7 +26,9 @@
 #include <utility>
 #include <vector>
 
-#include "s2kf/io/c3d_error.hpp"
+#include <s2kf/core/label_text.hpp>
+#include <s2kf/io/c3d_error.hpp>
+#include <s2kf/io/marker_sequence.hpp>
 
 namespace s2kf::c3d {
 
@@ -108,51 +110,23 @@ struct Parameter {
   bool locked = false;
 };
 
-/// One frame of marker positions.
-struct Frame {
-  std::int64_t index = 0;  ///< 0-based among the stored frames
-  /// Column p is point p in mm; NaN where the point is missing.
-  Eigen::Matrix3Xd positions;
-  /// visible(p) is false for a missing point. A missing point never has stale coordinates.
-  Eigen::Array<bool, Eigen::Dynamic, 1> visible;
-};
+/// One frame of marker positions (0-based index among the stored frames).
+using Frame = MarkerFrame;
 
-/// All frames of a file.
-struct Recording {
+/// All frames of a file: the marker data (labels as in marker_labels(info)) and what the file says.
+struct Recording : MarkerSequence {
   C3dInfo info;
-  /// 3P x F: rows 3p..3p+2 of column f are point p of frame f in mm, NaN when missing.
-  Eigen::MatrixXd positions;
-  /// P x F: false where a point is missing.
-  Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> visible;
-
-  Eigen::Index frame_count() const { return positions.cols(); }
-  Eigen::Index point_count() const { return visible.rows(); }
-  /// Frame f as a 3 x P view in mm.
-  Eigen::Map<const Eigen::Matrix3Xd> frame(Eigen::Index f) const {
-    return Eigen::Map<const Eigen::Matrix3Xd>(positions.col(f).data(), 3, point_count());
-  }
 };
+
+/// The labels a C3D file's points are matched by: their names (subject prefix kept), with model
+/// outputs (angles, forces, ... that Vicon stores as points) as empty strings, which match nothing.
+inline std::vector<std::string> marker_labels(const C3dInfo& info) {
+  std::vector<std::string> labels;
+  for (const PointLabel& label : info.labels) labels.push_back(label.model_output ? std::string() : label.name);
+  return labels;
+}
 
 namespace detail {
-
-inline std::string trim(std::string_view text) {
-  std::size_t begin = 0;
-  std::size_t end = text.size();
-  const auto blank = [](char c) { return c == ' ' || c == '\0' || c == '\t' || c == '\r' || c == '\n'; };
-  while (begin < end && blank(text[begin])) ++begin;
-  while (end > begin && blank(text[end - 1])) --end;
-  return std::string(text.substr(begin, end - begin));
-}
-
-inline std::string upper(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return text;
-}
-
-inline std::string lower(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
-}
 
 /// Shortest decimal that reads back as the same float, for warnings a user compares with a hex dump.
 inline std::string format_number(double value) {
@@ -251,8 +225,8 @@ class C3dReader {
   const std::vector<Parameter>& parameters() const { return parameters_; }
   /// The first parameter GROUP:NAME (case-insensitive), or nullptr.
   const Parameter* parameter(std::string_view group, std::string_view name) const {
-    const std::string g = detail::upper(std::string(group));
-    const std::string n = detail::upper(std::string(name));
+    const std::string g = upper_case(std::string(group));
+    const std::string n = upper_case(std::string(name));
     for (const Parameter& p : parameters_)
       if (p.group == g && p.name == n) return &p;
     return nullptr;
@@ -466,7 +440,7 @@ class C3dReader {
         stop("an entry cut off by the end of the file");
         break;
       }
-      std::string name = detail::upper(detail::trim(
+      std::string name = upper_case(trim(
           std::string_view(reinterpret_cast<const char*>(&bytes[q]), static_cast<std::size_t>(name_length))));
       q += name_length;
       const std::int64_t offset_position = q;
@@ -516,7 +490,7 @@ class C3dReader {
         const int description_length = bytes[structural_end];
         const std::int64_t available =
             std::min<std::int64_t>(description_length, window - structural_end - 1);
-        parameter.description = detail::trim(std::string_view(
+        parameter.description = trim(std::string_view(
             reinterpret_cast<const char*>(&bytes[structural_end + 1]), static_cast<std::size_t>(available)));
         natural_end = structural_end + 1 + available;
       }
@@ -573,7 +547,7 @@ class C3dReader {
         const std::int64_t count = elements / length;
         parameter.strings.reserve(static_cast<std::size_t>(count));
         for (std::int64_t i = 0; i < count; ++i)
-          parameter.strings.push_back(detail::trim(std::string_view(
+          parameter.strings.push_back(trim(std::string_view(
               reinterpret_cast<const char*>(data + i * length), static_cast<std::size_t>(length))));
         return;
       }
@@ -622,7 +596,7 @@ class C3dReader {
       return;
     }
     info_.units = units->strings[0];
-    const std::string u = detail::lower(info_.units);
+    const std::string u = lower_case(info_.units);
     if (u == "mm" || u == "millimeters" || u == "millimetres" || u == "millimeter" || u == "millimetre")
       info_.to_mm = 1.0;
     else if (u == "m" || u == "meters" || u == "metres" || u == "meter" || u == "metre")
@@ -917,6 +891,8 @@ class C3dReader {
 inline Recording read_all(C3dReader& reader) {
   Recording recording;
   recording.info = reader.info();
+  recording.labels = marker_labels(recording.info);
+  recording.rate_hz = recording.info.rate;
   reader.read_frames(reader.info().frame_count - reader.next_frame(), recording.positions, recording.visible);
   return recording;
 }

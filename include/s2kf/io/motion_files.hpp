@@ -3,6 +3,9 @@
 /// project's own column layout, also used for ground truth) and as an OpenSim motion file (.mot).
 #pragma once
 
+#include <s2kf/core/constants.hpp>
+
+#include <s2kf/body/pose.hpp>
 #include <s2kf/io/atomic_file.hpp>
 
 #include <Eigen/Core>
@@ -40,10 +43,7 @@ struct MotionTable {
 
 /// The CSV header: frame,time,root_x,root_y,root_z,root_roll,root_pitch,root_yaw,<joints>.
 inline std::vector<std::string> motion_columns(const std::vector<std::string>& joint_names) {
-  std::vector<std::string> columns{"frame",  "time",      "root_x",     "root_y",
-                                   "root_z", "root_roll", "root_pitch", "root_yaw"};
-  columns.insert(columns.end(), joint_names.begin(), joint_names.end());
-  return columns;
+  return body::pose_column_names(joint_names);
 }
 
 /// One row of a motion: root position, roll/pitch/yaw and joints (a MotionTable row transposed, or
@@ -98,7 +98,7 @@ inline void write_opensim_mot_header(std::ostream& out, const std::string& name,
 /// One line of write_opensim_mot (of a tracked row): time, root translation in metres, angles in
 /// degrees, tab-separated, %.9g.
 inline void write_opensim_mot_row(std::ostream& out, double time, const MotionRowRef& values) {
-  const double degrees = 180.0 / 3.14159265358979323846;
+  const double degrees = kDegreesPerRadian;
   out << std::setprecision(9) << time;
   for (Eigen::Index c = 0; c < values.size(); ++c) out << "\t" << values(c) * (c < 3 ? 0.001 : degrees);
   out << "\n";

@@ -4,6 +4,8 @@
 /// output the standard fixes) instead of the implementation-defined std:: distributions.
 #pragma once
 
+#include <s2kf/core/box_muller.hpp>
+
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -30,7 +32,7 @@ inline double uniform(std::mt19937_64& rng, double a, double b) { return a + (b 
 inline double standard_normal(std::mt19937_64& rng) {
   const double u1 = 1.0 - uniform01(rng);  // in (0, 1]: log stays finite
   const double u2 = uniform01(rng);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * 3.14159265358979323846 * u2);
+  return box_muller(u1, u2).first;
 }
 
 /// The largest Poisson mean `poisson` accepts: the exact method below costs O(lambda) draws.

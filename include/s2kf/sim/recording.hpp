@@ -3,6 +3,7 @@
 /// markers, with the true pose of every frame kept beside the measurements.
 #pragma once
 
+#include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/sim/keyframe_motion.hpp>
 #include <s2kf/sim/occlusion.hpp>
@@ -31,20 +32,16 @@ struct RecordingOptions {
   std::vector<Blackout> blackouts;               ///< planned losses of every marker
 };
 
-/// What a simulation produces. Frame k is at time k / frame_rate (0-based, like the tracker's CSV).
-struct Recording {
+/// What a simulation produces: the measured markers (clean + sensor noise, NaN where hidden; labels
+/// are the subject's marker names) with what a real recording never has, the truth. Frame k is at
+/// time k / rate_hz (0-based, like the tracker's CSV).
+struct Recording : MarkerSequence {
   std::string motion_name;
-  double frame_rate = 100.0;
-  std::vector<std::string> marker_names;
   std::vector<body::Pose> truth;        ///< the subject's true pose per frame (mm, rad)
   std::vector<Eigen::Matrix3Xd> clean;  ///< markers with placement and soft tissue, before noise (mm)
-  /// clean + sensor noise; hidden markers hold NaN.
-  std::vector<Eigen::Matrix3Xd> measured;
-  Visibility visible;  ///< markers x frames
 
-  Eigen::Index frames() const { return static_cast<Eigen::Index>(truth.size()); }
-  Eigen::Index markers() const { return static_cast<Eigen::Index>(marker_names.size()); }
-  double time(Eigen::Index frame) const { return static_cast<double>(frame) / frame_rate; }
+  Eigen::Index frames() const { return frame_count(); }
+  Eigen::Index markers() const { return point_count(); }
   double hidden_fraction() const { return visible.size() ? 1.0 - visible.cast<double>().mean() : 0.0; }
 };
 
@@ -79,19 +76,20 @@ inline Recording simulate_recording(const KeyframeMotion& motion, const Subject&
 
   Recording recording;
   recording.motion_name = motion.name;
-  recording.frame_rate = options.frame_rate;
-  recording.marker_names = subject.marker_names;
-  const Eigen::Index markers = recording.markers();
+  recording.rate_hz = options.frame_rate;
+  recording.labels = subject.marker_names;
+  recording.resize(frames);
+  const auto markers = static_cast<Eigen::Index>(recording.labels.size());
   std::mt19937_64 noise_rng(derive_seed(seed, static_cast<std::uint64_t>(RandomStream::noise)));
   for (Eigen::Index k = 0; k < frames; ++k) {
     const double t = static_cast<double>(k) / options.frame_rate;
     recording.truth.push_back(pose_from_sample(trajectory.at(motion.start_time() + t), subject.height_mm));
     recording.clean.push_back(subject_marker_positions(subject, recording.truth.back(), t));
-    Eigen::Matrix3Xd measured = recording.clean.back();
+    auto measured = recording.frame(k);
+    measured = recording.clean.back();
     if (subject.noise_sd_mm > 0.0)
       for (Eigen::Index m = 0; m < markers; ++m)
         for (int c = 0; c < 3; ++c) measured(c, m) += subject.noise_sd_mm * standard_normal(noise_rng);
-    recording.measured.push_back(std::move(measured));
   }
 
   recording.visible = Visibility::Constant(markers, frames, true);
@@ -111,7 +109,7 @@ inline Recording simulate_recording(const KeyframeMotion& motion, const Subject&
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (Eigen::Index k = 0; k < frames; ++k)
     for (Eigen::Index m = 0; m < markers; ++m)
-      if (!recording.visible(m, k)) recording.measured[static_cast<std::size_t>(k)].col(m).setConstant(nan);
+      if (!recording.visible(m, k)) recording.frame(k).col(m).setConstant(nan);
   return recording;
 }
 

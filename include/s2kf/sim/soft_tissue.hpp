@@ -3,6 +3,8 @@
 /// centimetre, in step with the joints that bend the skin under it and with slow drift.
 #pragma once
 
+#include <s2kf/core/constants.hpp>
+
 #include <s2kf/sim/random.hpp>
 
 #include <Eigen/Core>
@@ -38,7 +40,7 @@ struct SoftTissue {
     }
     for (int c = 0; c < 3; ++c)
       s(c) += drift_amplitude(c) *
-              std::sin(2.0 * 3.14159265358979323846 * drift_frequency(c) * time_s + drift_phase(c));
+              std::sin(2.0 * kPi * drift_frequency(c) * time_s + drift_phase(c));
     return s;
   }
 };
@@ -61,7 +63,7 @@ inline SoftTissue draw_soft_tissue(const std::vector<Eigen::Index>& joints, doub
   for (int c = 0; c < 3; ++c) {
     tissue.drift_amplitude(c) = drift * std::abs(standard_normal(rng));
     tissue.drift_frequency(c) = uniform(rng, 0.1, 0.5);
-    tissue.drift_phase(c) = uniform(rng, 0.0, 2.0 * 3.14159265358979323846);
+    tissue.drift_phase(c) = uniform(rng, 0.0, 2.0 * kPi);
   }
   return tissue;
 }

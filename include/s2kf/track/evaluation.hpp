@@ -1,12 +1,14 @@
 /// @file
 /// The paper's evaluation (section 5) on an in-memory recording, for the S2KF tracker and the
 /// per-frame gradient baseline: marker distance, runtime and accuracy against ground truth per
-/// method; the occlusion Monte Carlo; the sample-count sweep. No file I/O: the `s2kf evaluate`
-/// command and the tests share it.
+/// method; the occlusion Monte Carlo; the sample-count sweep. A recording is prepared as for
+/// tracking (prepare_session); sample sets come from the cache (sample_cache.hpp). The
+/// `s2kf evaluate` command and the tests share it.
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
-#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/random.hpp>
@@ -17,6 +19,7 @@
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/session.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
 #include <Eigen/Core>
@@ -34,46 +37,9 @@
 
 namespace s2kf::track {
 
-/// The model and marker mapping both methods use for one recording: the MMM model scaled to the
-/// height estimated from rigid marker pairs (as `s2kf track` does), or to `height_mm` when given.
-struct EvaluationSetup {
-  body::BodyModel model;
-  MarkerMapping mapping;
-  double rate_hz = 0;
-  double height_mm = 0;
-};
-
-/// Throws std::invalid_argument (a sentence) when the recording has no frames, no valid rate or
-/// too few labels that are markers of the model.
-inline EvaluationSetup prepare_evaluation(const c3d::Recording& recording, double height_mm = 0) {
-  if (recording.frame_count() == 0) throw std::invalid_argument("the recording holds no frame");
-  if (!(recording.info.rate > 0)) throw std::invalid_argument("the recording has no valid frame rate");
-  EvaluationSetup setup;
-  setup.rate_hz = recording.info.rate;
-  setup.model = body::mmm_body_model(1000.0);
-  std::vector<std::string> labels;
-  for (const c3d::PointLabel& label : recording.info.labels)
-    labels.push_back(label.model_output ? std::string() : label.name);
-  setup.mapping = map_markers(labels, setup.model.marker_names());
-  if (setup.mapping.markers_used() < TrackerOptions{}.min_markers_to_start)
-    throw std::invalid_argument("only " + std::to_string(setup.mapping.markers_used()) +
-                                " labels of the recording are markers of the body model; at least " +
-                                std::to_string(TrackerOptions{}.min_markers_to_start) + " are needed");
-  setup.height_mm = height_mm;
-  if (!(height_mm > 0)) {
-    HeightEstimator estimator(setup.model, setup.mapping);
-    const Eigen::Index step = std::max<Eigen::Index>(1, recording.frame_count() / 200);
-    for (Eigen::Index f = 0; f < recording.frame_count(); f += step)
-      estimator.add_frame(recording.frame(f), recording.visible.col(f));
-    setup.height_mm = estimator.height_mm().value_or(1750.0);
-  }
-  setup.model = setup.model.scaled(setup.height_mm);
-  return setup;
-}
-
 /// Throws std::invalid_argument (a sentence) unless `truth` fits the recording: the model's joint
 /// columns and one row per frame, numbered 0, 1, ...
-inline void check_truth(const io::MotionTable& truth, const EvaluationSetup& setup, Eigen::Index frames) {
+inline void check_truth(const io::MotionTable& truth, const Session& setup, Eigen::Index frames) {
   if (truth.joint_names != setup.model.joint_names())
     throw std::invalid_argument("the truth's joint columns are not the body model's " +
                                 std::to_string(setup.model.joint_count()) + " joints (BPx ... RAy) in order");
@@ -97,16 +63,6 @@ inline io::MotionTable first_rows(const io::MotionTable& motion, Eigen::Index ro
   return head;
 }
 
-/// The first `frames` frames of a recording (all of them when frames <= 0 or beyond its length).
-inline c3d::Recording first_frames(const c3d::Recording& recording, Eigen::Index frames) {
-  if (frames <= 0 || frames >= recording.frame_count()) return recording;
-  c3d::Recording head = recording;
-  head.positions = recording.positions.leftCols(frames);
-  head.visible = recording.visible.leftCols(frames);
-  head.info.frame_count = frames;
-  return head;
-}
-
 /// The mean distance (mm) between the markers a pose predicts (3 x model markers) and the points
 /// of `reference` (3 x P) that are mapped and visible there: the paper's "average marker distance",
 /// against every recorded marker whether or not the tracker was shown it. NaN when none.
@@ -124,26 +80,19 @@ inline double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eige
   return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
 }
 
-enum class Method { s2kf, baseline };
-
-inline std::string to_string(Method method) { return method == Method::s2kf ? "s2kf" : "baseline"; }
-
 /// Tracks `input` with one method; `reference` (same frames and points) is what the marker
 /// distance is measured against (the input itself, or the complete recording when the input had
 /// markers hidden). on_frame(index) is called after every frame.
-inline TrackingRun track_recording(const EvaluationSetup& setup, const c3d::Recording& input,
-                                   const c3d::Recording& reference, Method method, int samples,
+inline TrackingRun track_recording(const Session& setup, const MarkerSequence& input,
+                                   const MarkerSequence& reference, Method method, int samples,
                                    std::vector<double>* distance_to_reference = nullptr,
                                    const std::function<void(long)>& on_frame = {}) {
   if (reference.frame_count() != input.frame_count() || reference.point_count() != input.point_count())
     throw std::invalid_argument("the reference recording must have the input's frames and points");
   Eigen::Index f = 0;
-  auto next_frame = [&](c3d::Frame& frame) {
+  auto next_frame = [&](MarkerFrame& frame) {
     if (f >= input.frame_count()) return false;
-    frame.index = f;
-    frame.positions = input.frame(f);
-    frame.visible = input.visible.col(f);
-    ++f;
+    input.read_frame(f++, frame);
     return true;
   };
   auto run_with = [&](auto& tracker) {
@@ -161,16 +110,16 @@ inline TrackingRun track_recording(const EvaluationSetup& setup, const c3d::Reco
     return run_tracking(tracker, next_frame, setup.rate_hz, setup.model.joint_names(), false, each);
   };
   if (method == Method::s2kf) {
-    TrackerOptions options;
+    TrackerOptions options = setup.tracker;
     options.samples = samples;
-    Tracker tracker(setup.model, setup.mapping, options, setup.rate_hz);
+    Tracker tracker(setup.model, setup.mapping, options, setup.rate_hz, lcd_sample_set(46, samples).set);
     return run_with(tracker);
   }
   GradientBaseline baseline(setup.model, setup.mapping);
   return run_with(baseline);
 }
 
-/// One method on one recording, summarised as spec/evaluation.md asks.
+/// One method on one recording, summarised as the paper's evaluation asks (docs/results.md).
 struct MethodResult {
   Method method = Method::s2kf;
   int samples = 0;  ///< S2KF sample count; 0 for the baseline
@@ -184,7 +133,7 @@ struct MethodResult {
   std::optional<TruthComparison> truth;          ///< when ground truth was given
 };
 
-inline MethodResult summarise(Method method, int samples, TrackingRun run, const EvaluationSetup& setup,
+inline MethodResult summarise(Method method, int samples, TrackingRun run, const Session& setup,
                               const io::MotionTable* truth, long warmup) {
   MethodResult result;
   result.method = method;
@@ -210,7 +159,7 @@ inline MethodResult summarise(Method method, int samples, TrackingRun run, const
 
 /// Tracks the recording with one method and summarises it; `truth` (optional) must have a row
 /// per frame of the recording with the model's joint columns.
-inline MethodResult evaluate_method(const EvaluationSetup& setup, const c3d::Recording& recording,
+inline MethodResult evaluate_method(const Session& setup, const MarkerSequence& recording,
                                     Method method, int samples, const io::MotionTable* truth, long warmup,
                                     const std::function<void(long)>& on_frame = {}) {
   TrackingRun run = track_recording(setup, recording, recording, method, samples, nullptr, on_frame);
@@ -264,8 +213,8 @@ struct OcclusionStudy {
 };
 
 /// The recording with the markers a visibility mask hides set to not visible (and NaN).
-inline c3d::Recording hide_points(const c3d::Recording& complete, const sim::Visibility& keep) {
-  c3d::Recording occluded = complete;
+inline MarkerSequence hide_points(const MarkerSequence& complete, const sim::Visibility& keep) {
+  MarkerSequence occluded = complete;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (Eigen::Index f = 0; f < complete.frame_count(); ++f)
     for (Eigen::Index p = 0; p < complete.point_count(); ++p)
@@ -277,7 +226,7 @@ inline c3d::Recording hide_points(const c3d::Recording& complete, const sim::Vis
 }
 
 /// `progress(run)` is called after each run. `warmup` frames are left out of the worst distance.
-inline OcclusionStudy occlusion_monte_carlo(const EvaluationSetup& setup, const c3d::Recording& complete,
+inline OcclusionStudy occlusion_monte_carlo(const Session& setup, const MarkerSequence& complete,
                                             const OcclusionOptions& options, long warmup = 20,
                                             const std::function<void(int)>& progress = {}) {
   if (options.runs < 1) throw std::invalid_argument("the occlusion study needs at least one run");
@@ -291,7 +240,7 @@ inline OcclusionStudy occlusion_monte_carlo(const EvaluationSetup& setup, const 
     std::mt19937_64 rng(sim::derive_seed(options.seed, static_cast<std::uint64_t>(r)));
     sim::Visibility keep = sim::Visibility::Constant(complete.point_count(), complete.frame_count(), true);
     sim::apply_random_occlusion(keep, options.occlusion, rng);
-    const c3d::Recording occluded = hide_points(complete, keep);
+    const MarkerSequence occluded = hide_points(complete, keep);
     std::vector<int> hidden;
     for (Eigen::Index f = 0; f < complete.frame_count(); ++f) {
       int count = 0;
@@ -329,7 +278,7 @@ inline OcclusionStudy occlusion_monte_carlo(const EvaluationSetup& setup, const 
 }
 
 /// Latency and accuracy of the S2KF for each sample count L on one recording.
-inline std::vector<MethodResult> sample_sweep(const EvaluationSetup& setup, const c3d::Recording& recording,
+inline std::vector<MethodResult> sample_sweep(const Session& setup, const MarkerSequence& recording,
                                               const std::vector<int>& sample_counts,
                                               const io::MotionTable* truth, long warmup,
                                               const std::function<void(int)>& progress = {}) {

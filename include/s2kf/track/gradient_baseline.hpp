@@ -107,7 +107,7 @@ class GradientBaseline {
 
  private:
   void initialise(const Eigen::Matrix3Xd& points) {
-    pose_ = body::Pose{};
+    pose_ = body::zero_pose(model_);
     const Eigen::Matrix3Xd zero = body::marker_positions(model_, pose_);
     Eigen::Matrix3Xd measured(3, markers_.size()), reference(3, markers_.size());
     for (std::size_t k = 0; k < markers_.size(); ++k) {

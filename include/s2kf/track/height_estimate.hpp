@@ -6,11 +6,13 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/io/frame_source.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -23,7 +25,7 @@ class HeightEstimator {
  public:
   HeightEstimator(const body::BodyModel& model, MarkerMapping mapping)
       : mapping_(std::move(mapping)), height_(model.height_mm) {
-    const Eigen::Matrix3Xd zero = body::marker_positions(model, body::Pose{});
+    const Eigen::Matrix3Xd zero = body::marker_positions(model, body::zero_pose(model));
     for (int a = 0; a < model.marker_count(); ++a)
       for (int b = a + 1; b < model.marker_count(); ++b) {
         if (model.markers[a].frame != model.markers[b].frame) continue;
@@ -62,5 +64,28 @@ class HeightEstimator {
   std::vector<Pair> pairs_;
   std::vector<double> ratios_;
 };
+
+/// A height and how many rigid pairs it came from.
+struct HeightEstimate {
+  double mm = 0;
+  std::size_t pairs = 0;
+};
+
+/// The body height from up to `max_frames` frames spread evenly through the source; nothing when
+/// the mapped markers form no rigid pair.
+inline std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
+                                                     const MarkerMapping& mapping, std::int64_t max_frames = 200) {
+  HeightEstimator estimator(model, mapping);
+  const std::int64_t frames = source.frame_count();
+  const std::int64_t step = std::max<std::int64_t>(1, frames / max_frames);
+  MarkerFrame frame;
+  for (std::int64_t f = 0; f < frames; f += step) {
+    if (!source.read(f, frame)) break;
+    estimator.add_frame(frame.positions, frame.visible);
+  }
+  const std::optional<double> mm = estimator.height_mm();
+  if (!mm) return std::nullopt;
+  return HeightEstimate{*mm, estimator.pair_count()};
+}
 
 }  // namespace s2kf::track

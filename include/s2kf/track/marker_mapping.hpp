@@ -2,6 +2,8 @@
 /// Mapping the point labels of a recording to the markers of a body model, by name.
 #pragma once
 
+#include <s2kf/core/label_text.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <string>
@@ -23,25 +25,10 @@ struct MarkerMapping {
   }
 };
 
-/// The label without a subject prefix ("Subject:LASI" -> "LASI") and surrounding blanks.
-inline std::string strip_subject_prefix(const std::string& label) {
-  const auto colon = label.rfind(':');
-  std::string name = colon == std::string::npos ? label : label.substr(colon + 1);
-  const auto first = name.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return {};
-  const auto last = name.find_last_not_of(" \t\r\n");
-  return name.substr(first, last - first + 1);
-}
-
 /// Matches labels to marker names exactly first, then case-insensitively. When two recording
 /// points carry the same marker name, the first one is used and the second is reported ignored.
 inline MarkerMapping map_markers(const std::vector<std::string>& recording_labels,
                                  const std::vector<std::string>& model_marker_names) {
-  auto upper = [](std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-    return s;
-  };
   MarkerMapping mapping;
   mapping.point_of_marker.assign(model_marker_names.size(), -1);
   for (std::size_t point = 0; point < recording_labels.size(); ++point) {
@@ -50,7 +37,7 @@ inline MarkerMapping map_markers(const std::vector<std::string>& recording_label
     for (std::size_t m = 0; m < model_marker_names.size() && marker < 0; ++m)
       if (model_marker_names[m] == name) marker = static_cast<int>(m);
     for (std::size_t m = 0; m < model_marker_names.size() && marker < 0; ++m)
-      if (upper(model_marker_names[m]) == upper(name)) marker = static_cast<int>(m);
+      if (same_name_ignoring_case(model_marker_names[m], name)) marker = static_cast<int>(m);
     if (marker < 0 || mapping.point_of_marker[marker] >= 0) {
       mapping.ignored_labels.push_back(recording_labels[point]);
       continue;

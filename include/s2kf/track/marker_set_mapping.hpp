@@ -19,7 +19,7 @@ inline MarkerMapping map_marker_set(const std::vector<std::string>& recording_la
   mapping.point_of_marker.assign(set.entries.size(), -1);
   const auto find = [&set](const std::string& name, bool ignore_case) {
     const auto same = [&](const std::string& a) {
-      return ignore_case ? body::detail::upper_case(a) == body::detail::upper_case(name) : a == name;
+      return ignore_case ? same_name_ignoring_case(a, name) : a == name;
     };
     for (std::size_t m = 0; m < set.entries.size(); ++m) {
       if (same(set.entries[m].label)) return static_cast<int>(m);

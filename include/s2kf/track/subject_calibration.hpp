@@ -11,6 +11,7 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
@@ -121,16 +122,17 @@ struct BundleFrame {
 /// Tracks all frames; returns the poses of the frames usable for calibration and the pass's mean
 /// marker distance after convergence.
 inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const MarkerMapping& mapping,
-                                           const TrackerOptions& tracker_options, double rate_hz,
-                                           const std::vector<Eigen::Matrix3Xd>& points,
-                                           const std::vector<Eigen::Array<bool, Eigen::Dynamic, 1>>& visible,
+                                           const TrackerOptions& tracker_options,
+                                           const MarkerSequence& recording, const SampleSet& samples,
                                            const CalibrationOptions& options, double& mean_distance) {
-  Tracker tracker(model, mapping, tracker_options, rate_hz);
+  Tracker tracker(model, mapping, tracker_options, recording.rate_hz, samples);
+  MarkerFrame input;
   std::vector<double> distance;
   std::vector<BundleFrame> frames;
   long started = -1;
-  for (std::size_t f = 0; f < points.size(); ++f) {
-    const FrameEstimate& estimate = tracker.process(points[f], visible[f]);
+  for (Eigen::Index f = 0; f < recording.frame_count(); ++f) {
+    recording.read_frame(f, input);
+    const FrameEstimate& estimate = tracker.process(input.positions, input.visible);
     distance.push_back(estimate.mean_marker_distance);
     if (!estimate.tracked) continue;
     if (started < 0) started = static_cast<long>(f);
@@ -157,9 +159,9 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const M
 class BundleAdjustment {
  public:
   BundleAdjustment(const body::BodyModel& start, const MarkerMapping& mapping,
-                   const std::vector<Eigen::Matrix3Xd>& points, const CalibrationOptions& options,
+                   const MarkerSequence& recording, const CalibrationOptions& options,
                    double noise_variance)
-      : start_(start), mapping_(mapping), points_(points), options_(options) {
+      : start_(start), mapping_(mapping), recording_(recording), options_(options) {
     segments_ = options.estimate_segment_scales ? scalable_segments(start) : std::vector<std::string>{};
     cumulative_.assign(segments_.size(), 1.0);
     for (int m = 0; m < start.marker_count(); ++m)
@@ -240,7 +242,7 @@ class BundleAdjustment {
   /// Sum of weighted squared residuals of one frame's markers (or unweighted, squared mm).
   double frame_residual_sum(const body::BodyModel& model, const BundleFrame& frame, bool weighted) const {
     const body::FrameTransforms tf = body::joint_frames(model, frame.position, frame.rotation, frame.joints);
-    const Eigen::Matrix3Xd& y = points_[static_cast<std::size_t>(frame.index)];
+    const auto y = recording_.frame(frame.index);
     double sum = 0;
     for (int u : frame.markers) {
       const int m = used_[static_cast<std::size_t>(u)];
@@ -276,7 +278,7 @@ class BundleAdjustment {
     B.setZero(n, unknowns_);
     g.setZero(n);
     const body::FrameTransforms tf = body::joint_frames(model, frame.position, frame.rotation, frame.joints);
-    const Eigen::Matrix3Xd& y = points_[static_cast<std::size_t>(frame.index)];
+    const auto y = recording_.frame(frame.index);
     Eigen::Matrix<double, 3, Eigen::Dynamic> jq(3, n), js(3, scales_);
     for (int u : frame.markers) {
       const int m = used_[static_cast<std::size_t>(u)];
@@ -424,7 +426,7 @@ class BundleAdjustment {
 
   const body::BodyModel& start_;
   const MarkerMapping& mapping_;
-  const std::vector<Eigen::Matrix3Xd>& points_;
+  const MarkerSequence& recording_;
   const CalibrationOptions& options_;
   std::vector<std::string> segments_;
   std::vector<double> cumulative_;
@@ -438,21 +440,21 @@ class BundleAdjustment {
 }  // namespace detail
 
 /// Calibrates `model` (a base model after apply_marker_set, scaled to the subject's height) on a
-/// recording: points[f] (3 x P, mm) and visible[f] per frame, `mapping` from recording points to
+/// recording (its frames consecutive, so the tracker can follow them), `mapping` from its points to
 /// model markers. Each round tracks the recording with the current model, keeps every stride-th
 /// frame's pose, leaves out outlying residuals, and bundle-adjusts those poses together with the
 /// bone-length factors and marker offsets. Markers the recording never shows keep their offsets.
 /// Joint limits are not touched, and the adjusted poses stay inside them.
 inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerMapping& mapping,
-                                            const TrackerOptions& tracker_options, double rate_hz,
-                                            const std::vector<Eigen::Matrix3Xd>& points,
-                                            const std::vector<Eigen::Array<bool, Eigen::Dynamic, 1>>& visible,
+                                            const TrackerOptions& tracker_options,
+                                            const MarkerSequence& recording, const SampleSet& samples,
                                             const CalibrationOptions& options = {}) {
   options.validate();
   model.validate();
-  if (points.size() != visible.size())
-    throw std::invalid_argument("calibration: one visibility vector per frame is needed");
-  if (points.empty()) throw std::invalid_argument("calibration: the recording has no frame");
+  if (recording.visible.cols() != recording.positions.cols() ||
+      recording.positions.rows() != 3 * recording.point_count())
+    throw std::invalid_argument("calibration: one visibility flag per point and frame is needed");
+  if (recording.frame_count() == 0) throw std::invalid_argument("calibration: the recording has no frame");
   if (mapping.point_of_marker.size() != static_cast<std::size_t>(model.marker_count()))
     throw std::invalid_argument("calibration: the marker mapping does not fit the body model");
   if (!options.marker_weight.empty() &&
@@ -463,7 +465,7 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
   SubjectCalibration result;
   result.model = model;
   const double noise_variance = tracker_options.marker_noise_mm * tracker_options.marker_noise_mm;
-  detail::BundleAdjustment adjustment(start, mapping, points, options, noise_variance);
+  detail::BundleAdjustment adjustment(start, mapping, recording, options, noise_variance);
   const std::vector<int>& used = adjustment.used();
 
   for (int round = 0; round <= options.iterations; ++round) {
@@ -471,7 +473,7 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
     if (last && !options.final_pass) break;
     CalibrationPass pass;
     std::vector<detail::BundleFrame> frames =
-        detail::track_pass(result.model, mapping, tracker_options, rate_hz, points, visible, options,
+        detail::track_pass(result.model, mapping, tracker_options, recording, samples, options,
                            pass.mean_marker_distance_mm);
     if (last) {
       result.passes.push_back(pass);
@@ -484,14 +486,15 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
     std::vector<double> all;
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const detail::BundleFrame& frame = frames[k];
-      const auto f = static_cast<std::size_t>(frame.index);
       const Eigen::Matrix3Xd predicted = body::marker_positions(
           result.model, body::joint_frames(result.model, frame.position, frame.rotation, frame.joints));
       distances[k].assign(used.size(), -1.0);
       for (std::size_t u = 0; u < used.size(); ++u) {
         const int point = mapping.point_of_marker[static_cast<std::size_t>(used[u])];
-        if (point >= points[f].cols() || !visible[f](point) || !points[f].col(point).allFinite()) continue;
-        distances[k][u] = (points[f].col(point) - predicted.col(used[u])).norm();
+        const auto points = recording.frame(frame.index);
+        if (point >= points.cols() || !recording.visible(point, frame.index) || !points.col(point).allFinite())
+          continue;
+        distances[k][u] = (points.col(point) - predicted.col(used[u])).norm();
         all.push_back(distances[k][u]);
       }
     }

@@ -3,17 +3,19 @@
 /// model and reports the pose per frame. No file I/O; frame by frame, for live systems too.
 #pragma once
 
+#include <s2kf/core/constants.hpp>
+
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/bounded_joints.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
 #include <s2kf/body/pose.hpp>
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/core/sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 #include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/rigid_fit.hpp>
+#include <s2kf/track/state_chart.hpp>
 #include <s2kf/track/tracker_options.hpp>
-
-#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <chrono>
@@ -47,18 +49,21 @@ struct FrameEstimate {
 /// limits for every Theta.
 class Tracker {
  public:
-  static constexpr int kRootDofs = 6;
+  static constexpr int kRootDofs = kFirstJointState;
 
-  Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options, double rate_hz)
+  /// `samples` is the S2KF's sample set for state_dimension() (6 + joints) dimensions, e.g.
+  /// lcd_sample_set(46, options.samples).set from the cache (sample_cache.hpp): where sample sets
+  /// come from is the caller's business, so the tracker does no file I/O. Options are checked first:
+  /// std::invalid_argument (one sentence) before any work.
+  Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options, double rate_hz,
+          const SampleSet& samples)
       : model_(std::move(model)),
         mapping_(std::move(mapping)),
-        options_(std::move(options)),
+        options_(validated(std::move(options), rate_hz)),
         rate_hz_(rate_hz),
-        filter_(lcd_sample_set(state_dimension(), options_.samples).set),
+        filter_(checked(samples, kRootDofs + model_.joint_count())),
         measurement_model_(model_, body::OrientationParameterization::local_rotation_error),
         mean_markers_model_(model_, body::OrientationParameterization::local_rotation_error) {
-    options_.validate();
-    if (!(rate_hz > 0)) throw std::invalid_argument("the frame rate must be positive");
     if (mapping_.point_of_marker.size() != static_cast<std::size_t>(model_.marker_count()))
       throw std::invalid_argument("the marker mapping does not fit the body model");
     for (int m = 0; m < model_.marker_count(); ++m)
@@ -158,6 +163,19 @@ class Tracker {
   }
 
  private:
+  static TrackerOptions validated(TrackerOptions options, double rate_hz) {
+    options.validate();
+    if (!(rate_hz > 0) || !std::isfinite(rate_hz)) throw std::invalid_argument("the frame rate must be positive");
+    return options;
+  }
+
+  static const SampleSet& checked(const SampleSet& samples, int dimension) {
+    if (samples.dimension() != dimension)
+      throw std::invalid_argument("the sample set has " + std::to_string(samples.dimension()) +
+                                  " dimensions; the tracker's state has " + std::to_string(dimension));
+    return samples;
+  }
+
   /// Start from the first frame with enough markers: root pose from a rigid fit of the visible
   /// markers to the model's zero pose (or the paper's marker mean), joints near the zero pose.
   void initialise(const Eigen::Matrix3Xd& points) {
@@ -165,7 +183,7 @@ class Tracker {
     state_.mean = Eigen::VectorXd::Zero(n);
     state_.covariance = Eigen::MatrixXd::Zero(n, n);
     Eigen::Matrix3Xd measured(3, estimate_.visible_markers), reference(3, estimate_.visible_markers);
-    const Eigen::Matrix3Xd zero_pose = body::marker_positions(model_, body::Pose{});
+    const Eigen::Matrix3Xd zero_pose = body::marker_positions(model_, body::zero_pose(model_));
     int k = 0;
     for (std::size_t u = 0; u < used_markers_.size(); ++u) {
       if (!observed_(3 * u)) continue;
@@ -177,9 +195,9 @@ class Tracker {
     reference_rotation_.setIdentity();
     Eigen::Vector3d position = centroid;
     if (options_.rigid_initialisation) {
-      const Eigen::Matrix4d fit = Eigen::umeyama(reference, measured, false);
-      reference_rotation_ = fit.topLeftCorner<3, 3>();
-      position = fit.topRightCorner<3, 1>();
+      const RigidTransform fit = fit_rigid_transform(reference, measured);
+      reference_rotation_ = fit.rotation;
+      position = fit.translation;
     }
     state_.mean.head<3>() = position;
     state_.covariance.diagonal().head<3>().setConstant(std::pow(options_.initial_position_sd_mm, 2));
@@ -193,7 +211,7 @@ class Tracker {
     // Joints: the paper starts every joint at mid-range (Theta = 0); the default starts at the
     // zero pose (standing) but keeps a joint whose zero lies on a limit a little inside it, where
     // sin still has slope, so the filter can move it.
-    if (options_.preset != "paper") {
+    if (options_.joints_start_near_zero_pose) {
       for (int j = 0; j < joint_count(); ++j) {
         const double lower = model_.joints[j].lower, upper = model_.joints[j].upper;
         if (upper <= lower) continue;
@@ -207,22 +225,12 @@ class Tracker {
     frames_since_start_ = 0;
   }
 
-  /// Folds the orientation error into the reference and keeps every Theta on the principal branch
-  /// [-pi/2, pi/2], where theta(Theta) is one-to-one (reflections pi - Theta keep theta, and flip
-  /// the sign of that state's row and column of the covariance).
+  /// Folds the orientation error into the reference and every Theta onto the principal branch
+  /// (state_chart.hpp).
   void recentre() {
     measurement_model_.recenter(state_.mean);
     reference_rotation_ = measurement_model_.reference_orientation();
-    for (int j = 0; j < joint_count(); ++j) {
-      double& theta = state_.mean(kRootDofs + j);
-      const double folded = std::remainder(theta, 2 * kPi);  // (-pi, pi]
-      theta = folded;
-      if (std::abs(folded) > kPi / 2) {
-        theta = (folded > 0 ? kPi : -kPi) - folded;
-        state_.covariance.row(kRootDofs + j) *= -1;
-        state_.covariance.col(kRootDofs + j) *= -1;
-      }
-    }
+    fold_joint_parameters(state_.mean, state_.covariance);
   }
 
   void finish(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible,
@@ -258,21 +266,14 @@ class Tracker {
   }
 
   /// measurement_model_.pose(state_.mean) written in place (that one returns its joint angles in
-  /// a new vector): the same formulas, BoundedJoints::angles for the joints.
+  /// a new vector), through the same bounded map.
   void write_pose(body::Pose& pose) const {
     pose.root_position = state_.mean.head<3>();
     pose.root_rpy = body::rpy_from_rotation(measurement_model_.root_rotation(state_.mean.segment<3>(3)));
     const body::BoundedJoints& joints = measurement_model_.bounded_joints();
-    for (int j = 0; j < joint_count(); ++j) {
-      const double lower = joints.lower(j), upper = joints.upper(j), half = 0.5 * (upper - lower);
-      pose.joints(j) =
-          half == 0
-              ? lower
-              : std::clamp(half * std::sin(state_.mean(kRootDofs + j)) + 0.5 * (upper + lower), lower, upper);
-    }
+    if (pose.joints.size() != joint_count()) pose.joints.resize(joint_count());
+    for (int j = 0; j < joint_count(); ++j) pose.joints(j) = joints.angle(j, state_.mean(kRootDofs + j));
   }
-
-  static constexpr double kPi = 3.14159265358979323846;
 
   body::BodyModel model_;
   MarkerMapping mapping_;

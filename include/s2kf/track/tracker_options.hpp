@@ -41,6 +41,12 @@ struct TrackerOptions {
   /// as the paper does: position = mean of the markers, orientation = 0 (false).
   bool rigid_initialisation = true;
 
+  /// Start every joint near the zero pose (standing), a little inside a limit that lies at zero so
+  /// sin still has slope there (true); or at mid-range, Theta = 0, as the paper does (false).
+  bool joints_start_near_zero_pose = true;
+
+  /// The preset these options came from, for reports only: no behaviour depends on it (a preset
+  /// is expanded into the fields above).
   std::string preset = "default";
 
   void validate() const {
@@ -52,12 +58,16 @@ struct TrackerOptions {
     if (!(position_speed_mm_per_s >= 0 && orientation_speed_rad_per_s >= 0 && joint_speed_per_s >= 0))
       throw std::invalid_argument("process noise levels must not be negative");
     if (min_markers_to_start < 3) throw std::invalid_argument("at least 3 markers are needed to start");
-    if (initial_iterations < 1 || converging_iterations < 1)
+    if (initial_iterations < 1 || converging_iterations < 1 || converging_frames < 0)
       throw std::invalid_argument("iteration counts must be at least 1");
+    if (!(initial_position_sd_mm > 0 && initial_orientation_sd_rad > 0 && initial_joint_sd > 0))
+      throw std::invalid_argument("initial standard deviations must be positive");
+    if (!(gate_probability >= 0 && gate_probability < 1))
+      throw std::invalid_argument("the gate probability must be in [0, 1)");
   }
 };
 
-/// The seed paper's numbers (spec/s2kf.md section 5), read with R in m^2 (1e-4 m^2 = (10 mm)^2),
+/// The seed paper's numbers (its section 5), read with R in m^2 (1e-4 m^2 = (10 mm)^2),
 /// Q_r = 25 mm^2 per frame, and 1e-10 for orientation and joints per frame; initial orientation 0
 /// with variance 1e-6, joints at mid-range with variance 1e-10, root from the marker mean. They are
 /// kept for comparison: with them the joints can barely move (docs/tracking.md shows the result).
@@ -73,6 +83,7 @@ inline TrackerOptions paper_preset(double rate_hz) {
   o.initial_joint_sd = 1e-5;                       // 1e-10
   o.initial_position_sd_mm = 300.0;                // replaced by the marker spread at start
   o.rigid_initialisation = false;
+  o.joints_start_near_zero_pose = false;
   o.initial_iterations = 1;
   o.converging_frames = 0;
   o.converging_iterations = 1;

@@ -1,5 +1,5 @@
 /// @file
-/// Summary numbers of a tracked recording (spec/evaluation.md): frames to converge, the distance
+/// Summary numbers of a tracked recording (docs/results.md): frames to converge, the distance
 /// level after convergence, latency percentiles.
 #pragma once
 

@@ -5,7 +5,7 @@
 /// sink instead, and memory then grows by only the two per-frame series the summary needs.
 #pragma once
 
-#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/track/tracker.hpp>
 
@@ -37,7 +37,10 @@ struct TrackedFrame {
   long frame = 0;                 ///< frame number in the recording
   double time = 0;                ///< seconds: frame / rate
   const Eigen::VectorXd& values;  ///< the motion row: 6 + joints values, NaN where not tracked
-  const FrameEstimate& estimate;  ///< the tracker's report (visible markers, distances, ...)
+  double mean_marker_distance = 0;  ///< mm, NaN where nothing was measured
+  int visible_markers = 0;          ///< mapped markers observed
+  /// The tracker's whole report; null for rows replayed after smoothing.
+  const FrameEstimate* estimate = nullptr;
 };
 
 using FrameSink = std::function<void(const TrackedFrame&)>;
@@ -58,7 +61,7 @@ TrackingRun run_tracking(FrameTracker& tracker, NextFrame&& next_frame, double r
   run.motion.joint_names = joint_names;
   std::vector<double> table;                              // the rows one after another (without a sink)
   std::map<std::string, std::pair<long, long>> failures;  // status -> (count, first frame)
-  c3d::Frame frame;
+  MarkerFrame frame;
   const Eigen::Index columns = 6 + static_cast<Eigen::Index>(joint_names.size());
   Eigen::VectorXd row(columns);
   while (next_frame(frame)) {
@@ -66,15 +69,13 @@ TrackingRun run_tracking(FrameTracker& tracker, NextFrame&& next_frame, double r
     const long index = run.frames++;
     const double time = static_cast<double>(frame.index) / rate_hz;
     if (e.tracked) {
-      row.head<3>() = e.pose.root_position;
-      row.segment<3>(3) = e.pose.root_rpy;
-      row.tail(columns - 6) = e.pose.joints;
+      body::write_pose_row(e.pose, row);
       ++run.frames_tracked;
     } else {
       row.setConstant(std::numeric_limits<double>::quiet_NaN());
     }
     if (sink) {
-      sink(TrackedFrame{index, frame.index, time, row, e});
+      sink(TrackedFrame{index, frame.index, time, row, e.mean_marker_distance, e.visible_markers, &e});
     } else {
       run.motion.frame.push_back(frame.index);
       run.motion.time.push_back(time);

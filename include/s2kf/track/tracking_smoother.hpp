@@ -4,10 +4,13 @@
 /// on the bounded joint parameters Theta, like the filter, so every joint stays within its limits.
 #pragma once
 
+#include <s2kf/core/constants.hpp>
+
 #include <s2kf/body/bounded_joints.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/rts_smoother.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/track/state_chart.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <cmath>
@@ -56,39 +59,15 @@ class TrackingSmoother {
             "TrackingSmoother::smooth: the motion table does not hold the recorded frames");
       motion.values.row(row).head<3>() = m.head<3>().transpose();
       motion.values.row(row).segment<3>(3) =
-          body::rpy_from_rotation(references_[k] * body::rotation_exp(m.segment<3>(3))).transpose();
+          body::rpy_from_rotation(chart_rotation(references_[k], m.segment<3>(3))).transpose();
       motion.values.row(row).tail(joints) = joints_.angles(m.tail(joints)).transpose();
     }
   }
 
  private:
-  /// Step k+1's coordinates differ from step k's by the tracker's re-centring: the orientation error
-  /// is about R_{k+1} instead of R_k, and a Theta that left [-pi/2, pi/2] was reflected to +-pi - Theta
-  /// (the same angle, the sign of its covariance row and column flipped). Rewrites a Gaussian of
-  /// step k+1 in step k's coordinates.
+  /// Step k+1's chart differs from step k's by the tracker's re-centring (state_chart.hpp).
   void to_chart_of(std::size_t k, Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) const {
-    // R_{k+1} Exp(e) = R_k Exp(e') with Exp(e') = D Exp(e), D = R_k^T R_{k+1}: exact for the mean.
-    // D is one frame's update, close to the identity, so the covariance is kept as it is (its
-    // change is of the order of the angle of D times the error).
-    const Eigen::Matrix3d d = references_[k].transpose() * references_[k + 1];
-    mean.segment<3>(3) = body::rotation_log(d * body::rotation_exp(mean.segment<3>(3)));
-    // Theta and pi - Theta (plus multiples of 2 pi) give the same angle: take the representative
-    // nearest step k's filtered value.
-    constexpr double kPi = 3.14159265358979323846;
-    const Eigen::VectorXd& reference = states_[k].mean;
-    for (Eigen::Index j = 6; j < mean.size(); ++j) {
-      const auto nearest = [&](double value) {
-        return value + 2 * kPi * std::round((reference(j) - value) / (2 * kPi));
-      };
-      const double direct = nearest(mean(j)), reflected = nearest(kPi - mean(j));
-      if (std::abs(reflected - reference(j)) < std::abs(direct - reference(j))) {
-        mean(j) = reflected;
-        covariance.row(j) *= -1;
-        covariance.col(j) *= -1;
-      } else {
-        mean(j) = direct;
-      }
-    }
+    to_previous_chart(references_[k], references_[k + 1], states_[k].mean, mean, covariance);
   }
 
   body::BoundedJoints joints_;

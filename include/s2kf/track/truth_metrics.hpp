@@ -1,7 +1,9 @@
 /// @file
-/// Accuracy of an estimated motion against ground truth (spec/evaluation.md): segment-orientation
+/// Accuracy of an estimated motion against ground truth (docs/results.md defines the metrics): segment-orientation
 /// error, limb flexion error, all-joint error and worst joint, root errors, joint-limit violations.
 #pragma once
+
+#include <s2kf/core/constants.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
@@ -48,7 +50,7 @@ inline TruthComparison compare_with_truth(const body::BodyModel& model, const io
     throw std::invalid_argument("compare_with_truth: joint columns differ from the body model's");
   std::set<int> segment_frames;
   for (const body::Marker& marker : model.markers) segment_frames.insert(marker.frame);
-  const double degrees = 180.0 / 3.14159265358979323846;
+  const double degrees = kDegreesPerRadian;
   auto angle_between = [](const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
     return Eigen::AngleAxisd(a.transpose() * b).angle();
   };

@@ -1,0 +1,269 @@
+/// @file
+/// The tracking pipeline: a session is prepared from a recording and a marker set (the model with
+/// the set's markers, the label mapping, the subject's height and where it came from, the subject
+/// calibration, the tracker's options), then run from a frame source into a frame sink. `s2kf track`,
+/// `s2kf calibrate`, `s2kf evaluate`, the Python module, the benchmarks and the tests all go through
+/// these two functions, so they prepare and track a recording the same way.
+///
+/// No file I/O here: frames come from a FrameSource, rows go to a FrameSink, and the sample set is
+/// the caller's (lcd_sample_set from sample_cache.hpp, or any other). Problems with the recording
+/// or the options throw std::invalid_argument with one sentence that does not name the file (the
+/// caller knows it).
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/sample_set.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/track/gradient_baseline.hpp>
+#include <s2kf/track/height_estimate.hpp>
+#include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/track/tracker.hpp>
+#include <s2kf/track/tracker_options.hpp>
+#include <s2kf/track/tracking_metrics.hpp>
+#include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/tracking_smoother.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace s2kf::track {
+
+/// Below this many millimetres every coordinate is a body's; beyond, the file's units or scale are
+/// wrong (a kilometre).
+inline constexpr double kAbsurdCoordinateMm = 1e6;
+
+/// A body height no person has: outside (300, 3000) mm.
+inline bool plausible_height_mm(double mm) { return mm > 300 && mm < 3000; }
+
+struct SessionOptions {
+  TrackerOptions tracker;  ///< a preset expanded (preset_options), samples included
+  double height_mm = 0;    ///< > 0: given; else the marker set's height, else estimated
+  /// When no height can be estimated (no two markers on one segment): this height with a warning,
+  /// or 0 to refuse the recording.
+  double fallback_height_mm = 1750;
+  bool calibrate = true;                    ///< fit the subject's offsets and bone lengths first
+  std::int64_t calibration_frames = 1200;   ///< frames from the start the calibration uses
+  CalibrationOptions calibration = [] {
+    CalibrationOptions options;
+    options.final_pass = false;  // the run's own first frames give the calibrated distance
+    return options;
+  }();
+  /// A calibration that cannot be done (too few usable frames) leaves the marker set as it is with
+  /// a warning (true), or is an error (false: `s2kf calibrate`).
+  bool calibration_may_fail = true;
+};
+
+/// What a recording is tracked with, ready to run.
+struct Session {
+  body::MarkerSet marker_set;
+  body::BodyModel model;  ///< the set applied, scaled to the subject, calibrated when asked
+  MarkerMapping mapping;  ///< recording points -> model markers
+  TrackerOptions tracker;  ///< with the set's per-marker noise
+  double rate_hz = 0;
+  double height_mm = 0;
+  std::string height_source;  ///< "given", "from the marker-set file", "estimated from N rigid marker pairs", ...
+  std::optional<SubjectCalibration> calibration;  ///< when calibrated
+  std::int64_t calibration_frames = 0;             ///< frames the calibration used
+  std::vector<std::string> warnings;               ///< the marker set's and the preparation's
+
+  int markers_used() const { return mapping.markers_used(); }
+};
+
+/// The marker set's per-marker noise as the tracker's option: each marker's `noise_mm`, NaN (the
+/// tracker's common noise) where the set gives none; empty when no marker has its own.
+inline std::vector<double> marker_noise_of(const body::MarkerSet& set) {
+  const bool any = std::any_of(set.entries.begin(), set.entries.end(),
+                               [](const body::MarkerSetEntry& entry) { return entry.noise_mm.has_value(); });
+  std::vector<double> noise;
+  if (!any) return noise;
+  for (const body::MarkerSetEntry& entry : set.entries)
+    noise.push_back(entry.noise_mm ? *entry.noise_mm : std::numeric_limits<double>::quiet_NaN());
+  return noise;
+}
+
+/// The calibration's per-marker weights: the set's weight, times (tracker noise / marker noise)^2
+/// where the set gives a marker its own noise.
+inline std::vector<double> calibration_weights(const body::MarkerSet& set, double tracker_noise_mm) {
+  std::vector<double> weights;
+  for (const body::MarkerSetEntry& entry : set.entries) {
+    double w = entry.weight;
+    if (entry.noise_mm) w *= (tracker_noise_mm * tracker_noise_mm) / (*entry.noise_mm * *entry.noise_mm);
+    weights.push_back(w);
+  }
+  return weights;
+}
+
+/// Prepares a session: checks the recording, maps its labels to the set's markers, finds the
+/// subject's height, scales the model and, when asked, calibrates the subject on the first
+/// `calibration_frames` frames (samples: the tracker's sample set, for 6 + joints dimensions).
+inline Session prepare_session(FrameSource& source, const body::MarkerSet& set, const SessionOptions& options,
+                               const SampleSet& samples) {
+  options.tracker.validate();
+  if (source.frame_count() == 0) throw std::invalid_argument("the recording holds no complete frame");
+  if (!(source.rate_hz() > 0) || !std::isfinite(source.rate_hz()))
+    throw std::invalid_argument("the recording has no valid frame rate");
+  Session session;
+  session.marker_set = set;
+  session.rate_hz = source.rate_hz();
+  const body::BodyModel base = body::mmm_body_model(set.reference_height_mm);
+  body::BodyModel model = body::apply_marker_set(base, set);
+  session.warnings = body::marker_set_warnings(base, model);
+  session.mapping = map_marker_set(source.labels(), set);
+  session.tracker = options.tracker;
+  session.tracker.marker_noise_mm_per_marker = marker_noise_of(set);
+  const int used = session.mapping.markers_used();
+  if (used == 0)
+    throw std::invalid_argument("none of its " + std::to_string(source.labels().size()) +
+                                " point labels is a marker of the marker set " + set.name +
+                                " (expected names such as " +
+                                (set.entries.empty() ? std::string("none") : set.entries.front().label) + ")");
+  if (used < session.tracker.min_markers_to_start)
+    throw std::invalid_argument("only " + std::to_string(used) + " of its labels are markers of the marker set " +
+                                set.name + "; at least " +
+                                std::to_string(session.tracker.min_markers_to_start) + " are needed to track");
+
+  if (options.height_mm > 0) {
+    session.height_mm = options.height_mm;
+    session.height_source = "given";
+  } else if (set.height_mm) {
+    session.height_mm = *set.height_mm;
+    session.height_source = "from the marker-set file";
+  } else if (const std::optional<HeightEstimate> estimate = estimate_height(source, model, session.mapping)) {
+    session.height_mm = estimate->mm;
+    session.height_source = "estimated from " + std::to_string(estimate->pairs) + " rigid marker pairs";
+  } else if (options.fallback_height_mm > 0) {
+    session.height_mm = options.fallback_height_mm;
+    session.height_source = "default (no two markers on one segment to estimate it from)";
+    std::ostringstream warning;
+    warning << "body height not estimable from the markers; " << options.fallback_height_mm
+            << " mm assumed (use --height)";
+    session.warnings.push_back(warning.str());
+  } else {
+    throw std::invalid_argument("the body height cannot be estimated from the markers; give --height");
+  }
+  if (!plausible_height_mm(session.height_mm))
+    throw std::invalid_argument("a body height of " + std::to_string(std::lround(session.height_mm)) +
+                                " mm is not a person's; check the file's units or give --height");
+  session.model = model.scaled(session.height_mm);
+
+  if (options.calibrate) {
+    CalibrationOptions calibration = options.calibration;
+    calibration.marker_weight = calibration_weights(set, session.tracker.marker_noise_mm);
+    session.calibration_frames = std::min<std::int64_t>(options.calibration_frames, source.frame_count());
+    try {
+      const MarkerSequence frames = read_frames(source, 0, session.calibration_frames);
+      session.calibration =
+          calibrate_subject(session.model, session.mapping, session.tracker, frames, samples, calibration);
+      session.model = session.calibration->model;
+    } catch (const std::invalid_argument& e) {
+      if (!options.calibration_may_fail) throw std::invalid_argument(std::string("calibration failed: ") + e.what());
+      session.calibration.reset();
+      session.calibration_frames = 0;
+      session.warnings.push_back(std::string("subject not calibrated (calibration failed: ") + e.what() +
+                                 "); the marker set is used as it is");
+    }
+  }
+  return session;
+}
+
+enum class Method { s2kf, baseline };
+
+inline std::string to_string(Method method) { return method == Method::s2kf ? "s2kf" : "baseline"; }
+
+struct RunOptions {
+  Method method = Method::s2kf;
+  /// Rauch-Tung-Striebel smoothing after the filter (S2KF only): every frame's posterior is kept
+  /// (TrackingSmoother::kBytesPerFrame each) and the rows go to the sink after the backward pass.
+  bool smooth = false;
+  bool keep_predicted_markers = false;  ///< TrackingRun::predicted_markers (evaluation)
+};
+
+/// Hooks of a run, each optional.
+struct RunHooks {
+  /// Called with every frame as read, before it is tracked: pacing, capturing a frame to draw.
+  std::function<void(const MarkerFrame&)> on_read;
+  /// Called after every frame with its 0-based index: progress.
+  std::function<void(long)> on_frame;
+  /// Receives every row; without a sink the run keeps the whole motion table (TrackingRun).
+  FrameSink sink;
+};
+
+/// Runs a prepared session over every frame of `source`. A coordinate beyond a kilometre stops the
+/// run with std::invalid_argument (the file's units or scale are wrong). With a sink, memory stays
+/// constant in the recording's length (unless smoothing); TrackingRun keeps the per-frame series.
+inline TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
+                               const RunOptions& options = {}, const RunHooks& hooks = {}) {
+  if (options.smooth && options.method != Method::s2kf)
+    throw std::invalid_argument("smoothing works on the S2KF's estimates, not the baseline's");
+  std::int64_t next = 0;
+  std::string bad_coordinates;
+  const auto next_frame = [&](MarkerFrame& frame) {
+    if (!source.read(next, frame)) return false;
+    ++next;
+    for (Eigen::Index p = 0; p < frame.positions.cols(); ++p)
+      if (frame.visible(p) && frame.positions.col(p).cwiseAbs().maxCoeff() > kAbsurdCoordinateMm) {
+        std::ostringstream s;
+        s << "frame " << frame.index << ", point " << source.labels()[static_cast<std::size_t>(p)] << " is at ("
+          << frame.positions.col(p).transpose() << ") mm, beyond a kilometre: the file's units or scale are wrong";
+        throw std::invalid_argument(s.str());
+      }
+    if (hooks.on_read) hooks.on_read(frame);
+    return true;
+  };
+  const std::vector<std::string> joint_names = session.model.joint_names();
+  if (options.method == Method::baseline) {
+    GradientBaseline baseline(session.model, session.mapping);
+    return run_tracking(baseline, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers,
+                        hooks.on_frame, hooks.sink);
+  }
+  Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
+  if (!options.smooth)
+    return run_tracking(tracker, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers,
+                        hooks.on_frame, hooks.sink);
+  TrackingSmoother smoother(tracker);
+  const auto on_frame = [&](long index) {
+    smoother.record(tracker, index);
+    if (hooks.on_frame) hooks.on_frame(index);
+  };
+  TrackingRun run =
+      run_tracking(tracker, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers, on_frame);
+  smoother.smooth(run.motion);
+  if (hooks.sink)
+    for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {
+      const auto f = static_cast<std::size_t>(r);
+      const Eigen::VectorXd values = run.motion.values.row(r).transpose();
+      hooks.sink(TrackedFrame{static_cast<long>(r), run.motion.frame[f], run.motion.time[f], values,
+                              run.mean_marker_distance[f], run.visible_markers[f], nullptr});
+    }
+  return run;
+}
+
+/// The calibrated subject's mean marker distance over the calibration window, from the run itself:
+/// the tracker is causal, so the run's first frames are what a final calibration pass would track.
+/// NaN when the session was not calibrated or nothing was measured there.
+inline double calibrated_distance_mm(const Session& session, const TrackingRun& run) {
+  if (!session.calibration) return std::numeric_limits<double>::quiet_NaN();
+  const auto& distance = run.mean_marker_distance;
+  const std::size_t end = std::min<std::size_t>(distance.size(), static_cast<std::size_t>(session.calibration_frames));
+  std::size_t first = 0;
+  while (first < end && !std::isfinite(distance[first])) ++first;
+  const std::size_t from =
+      std::min<std::size_t>(end, first + static_cast<std::size_t>(CalibrationOptions{}.skip_frames));
+  return mean_from(std::vector<double>(distance.begin() + static_cast<std::ptrdiff_t>(from),
+                                       distance.begin() + static_cast<std::ptrdiff_t>(end)),
+                   0);
+}
+
+}  // namespace s2kf::track

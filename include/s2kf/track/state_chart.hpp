@@ -1,0 +1,73 @@
+/// @file
+/// The tracker's chart of the body state and its changes. The state is x = [root position (mm),
+/// orientation error delta (rad), Theta (one per joint)]: the root's rotation is R = R_ref Exp(delta)
+/// about a reference R_ref the tracker moves after every update, and a joint's angle is
+/// theta = (u - l)/2 sin(Theta) + (u + l)/2, the same for Theta, pi - Theta and any 2 pi shift. The
+/// tracker keeps each Theta on the principal branch [-pi/2, pi/2]; the smoother undoes the tracker's
+/// re-centring between frames with the inverse changes below. Both use these functions only.
+#pragma once
+
+#include <s2kf/body/pose.hpp>
+#include <s2kf/core/constants.hpp>
+
+#include <Eigen/Core>
+
+#include <cmath>
+
+namespace s2kf::track {
+
+/// Index of the first Theta in the state (after root position and orientation error).
+inline constexpr int kFirstJointState = 6;
+
+/// The root rotation a state's orientation error stands for: R_ref Exp(delta).
+inline Eigen::Matrix3d chart_rotation(const Eigen::Matrix3d& reference, const Eigen::Vector3d& delta) {
+  return reference * body::rotation_exp(delta);
+}
+
+/// Flips the sign of state k in a covariance (the state was reflected: Theta -> pi - Theta).
+inline void flip_state_sign(Eigen::MatrixXd& covariance, Eigen::Index k) {
+  covariance.row(k) *= -1;
+  covariance.col(k) *= -1;
+}
+
+/// Moves every Theta of `mean` onto the principal branch [-pi/2, pi/2], where theta(Theta) is
+/// one-to-one: first into (-pi, pi], then reflected to +-pi - Theta where needed (the same angle;
+/// the sign of that state's covariance row and column flips).
+inline void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) {
+  for (Eigen::Index k = kFirstJointState; k < mean.size(); ++k) {
+    const double folded = std::remainder(mean(k), 2 * kPi);  // (-pi, pi]
+    mean(k) = folded;
+    if (std::abs(folded) > kPi / 2) {
+      mean(k) = (folded > 0 ? kPi : -kPi) - folded;
+      flip_state_sign(covariance, k);
+    }
+  }
+}
+
+/// Rewrites a Gaussian of the chart after a re-centring (reference `next`, Theta folded) in the
+/// chart before it (reference `previous`, whose Theta values are `previous_mean`): the inverse of
+/// the tracker's re-centring, as the smoother needs it.
+///
+/// Orientation: R_next Exp(e) = R_previous Exp(e') with Exp(e') = D Exp(e), D = R_previous^T R_next,
+/// exact for the mean. D is one frame's update, close to the identity, so the covariance is kept as
+/// it is (its change is of the order of the angle of D times the error). Joints: of Theta's
+/// representatives (Theta + 2k pi, pi - Theta + 2k pi) the one nearest the previous value.
+inline void to_previous_chart(const Eigen::Matrix3d& previous, const Eigen::Matrix3d& next,
+                              const Eigen::VectorXd& previous_mean, Eigen::VectorXd& mean,
+                              Eigen::MatrixXd& covariance) {
+  const Eigen::Matrix3d d = previous.transpose() * next;
+  mean.segment<3>(3) = body::rotation_log(d * body::rotation_exp(mean.segment<3>(3)));
+  for (Eigen::Index k = kFirstJointState; k < mean.size(); ++k) {
+    const double reference = previous_mean(k);
+    const auto nearest = [&](double value) { return value + 2 * kPi * std::round((reference - value) / (2 * kPi)); };
+    const double direct = nearest(mean(k)), reflected = nearest(kPi - mean(k));
+    if (std::abs(reflected - reference) < std::abs(direct - reference)) {
+      mean(k) = reflected;
+      flip_state_sign(covariance, k);
+    } else {
+      mean(k) = direct;
+    }
+  }
+}
+
+}  // namespace s2kf::track
