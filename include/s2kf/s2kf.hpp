@@ -14,7 +14,6 @@
 
 #include <s2kf/core/box_muller.hpp>
 #include <s2kf/core/chi_square.hpp>
-#include <s2kf/core/compiled.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/exponential_integral.hpp>

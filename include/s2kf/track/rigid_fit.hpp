@@ -1,10 +1,10 @@
 /// @file
 /// The rigid transform that best maps one point set onto another (least squares, Umeyama's method
-/// without scale): how the tracker places the root on its first frame. Kept apart because Eigen's
-/// SVD behind it is heavy to compile and the rest of the tracker does not need it.
+/// without scale): how the tracker places the root on its first frame.
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace s2kf::track {
 
@@ -13,12 +13,14 @@ struct RigidTransform {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 };
 
-/// R, t minimising sum |R from_i + t - to_i|^2 over the columns (3 x N each, N >= 3 not collinear
-/// for a unique answer).
-RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to);
+/// R, t minimising sum |R from_i + t - to_i|^2 over the columns (3 x N each; N >= 3 points not on
+/// one line for a unique answer).
+inline RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to) {
+  const Eigen::Matrix4d fit = Eigen::umeyama(from, to, false);
+  RigidTransform transform;
+  transform.rotation = fit.topLeftCorner<3, 3>();
+  transform.translation = fit.topRightCorner<3, 1>();
+  return transform;
+}
 
 }  // namespace s2kf::track
-
-#if !defined(S2KF_COMPILED) || defined(S2KF_COMPILING_LIBRARY)
-#include <s2kf/track/rigid_fit_impl.hpp>
-#endif
