@@ -199,7 +199,7 @@ TEST_F(ViewerPage, TruthIsShownAndTheDataLayoutIsAsDocumented) {
   const std::size_t start = page.find('>', begin) + 1;
   const nlohmann::json meta = nlohmann::json::parse(page.substr(start, page.find("</script>", start) - start));
   // docs/viewer.md: frame, time, pose (46), mean distance, 17 joint centres, 50 model markers, 50
-  // recorded markers and, with --truth, 17 true joint centres: 452 floats, 1808 bytes per frame.
+  // recorded markers and, with --truth, 17 true joint centres: 451 floats, 1804 bytes per frame.
   EXPECT_EQ(meta["floats_per_frame"], 1 + 1 + 46 + 1 + 3 * 17 + 3 * 50 + 3 * 50 + 3 * 17);
   EXPECT_EQ(meta["frames_stored"], kFrames);
   EXPECT_EQ(meta["decimated"], false);
@@ -232,7 +232,7 @@ TEST_F(ViewerPage, LongMotionsAreDecimatedAndThePageSaysSo) {
   SKIP_WITHOUT_CHROMIUM();
   const std::string prefix = (kWork / "decimated").string();
   for (const char* suffix : {".csv", ".json"}) fs::copy_file(plain_ + suffix, prefix + suffix, fs::copy_options::overwrite_existing);
-  // 0.1 MiB holds 58 of the 150 records of 1808 bytes: every 3rd frame.
+  // 0.1 MiB holds 58 of the 150 records of 1804 bytes: every 3rd frame.
   const auto view = run_command("view " + prefix + " --truth " + truth_ + " --max-data-mb 0.1");
   ASSERT_EQ(view.status, 0) << view.output;
   const nlohmann::json state = open_page(prefix + ".html", "#frame=31");

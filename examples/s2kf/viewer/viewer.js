@@ -151,8 +151,11 @@ function main() {
   const jointMesh = instanced(sphere(0.022), new THREE.MeshBasicMaterial({ color: COLOURS.joint }), P);
   const recordedMesh = instanced(sphere(0.014), new THREE.MeshLambertMaterial({ color: 0xffffff }), M);
   const modelMesh = instanced(sphere(0.010), new THREE.MeshLambertMaterial({ color: COLOURS.model }), M);
-  const hiddenMesh = instanced(new THREE.TorusGeometry(0.016, 0.003, 6, 20),
-                               new THREE.MeshBasicMaterial({ color: COLOURS.hidden }), M);
+  // Hidden markers: a wire sphere at the model's position (looks the same from every side).
+  const hiddenMesh = instanced(new THREE.SphereGeometry(0.016, 8, 6),
+                               new THREE.MeshBasicMaterial({ color: COLOURS.hidden, wireframe: true }), M);
+  // Every instance gets a colour now, so the shader is built with instance colours from the start.
+  for (let m = 0; m < M; ++m) recordedMesh.setColorAt(m, new THREE.Color(0xffffff));
   const truthMesh = hasTruth ? instanced(sphere(0.016), new THREE.MeshBasicMaterial({ color: COLOURS.truth, transparent: true, opacity: 0.45 }), P) : null;
   const lineSet = (pairs, material) => {
     const geometry = new THREE.BufferGeometry();
@@ -216,8 +219,6 @@ function main() {
       }
       setLine(residualLines, m, seen ? recorded : new THREE.Vector3(NaN, 0, 0), model);
     }
-    // Hidden markers' rings face the camera.
-    hiddenMesh.lookAt(camera.position);
     if (hasTruth) {
       const truth = [];
       for (let p = 0; p < P; ++p) { truth.push(point(current, 'truth_skeleton', p)); place(truthMesh, p, truth[p]); }
