@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -27,7 +29,8 @@ namespace {
 namespace fs = std::filesystem;
 using s2kf::test_support::run_command;
 
-const fs::path kWork = fs::path(S2KF_TEST_TMP_DIR) / "viewer";
+// ctest runs every test in its own process, in parallel: each process works in its own directory.
+const fs::path kWork = fs::path(S2KF_TEST_TMP_DIR) / ("viewer_" + std::to_string(::getpid()));
 constexpr double kHeightMm = 1750;
 constexpr int kFrames = 150;
 
@@ -78,6 +81,8 @@ class ViewerPage : public ::testing::Test {
     ASSERT_EQ(calibrated.status, 0) << calibrated.output;
     unavailable_ = s2kf::test_support::chromium_unavailable_reason(kWork);
   }
+
+  static void TearDownTestSuite() { fs::remove_all(kWork); }
 
   void SetUp() override { ASSERT_TRUE(fs::exists(plain_ + ".html")) << "the fixture's track --html failed"; }
 
@@ -176,6 +181,7 @@ TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
                                    "--screenshot=" + screenshot.string(), kWork);
   ASSERT_TRUE(fs::exists(screenshot));
   EXPECT_GT(fs::file_size(screenshot), 20000u) << "a blank screenshot";
+  fs::copy_file(screenshot, fs::path(S2KF_TEST_TMP_DIR) / "viewer_frame100.png", fs::copy_options::overwrite_existing);
 }
 
 TEST_F(ViewerPage, TimelineMovesTheSkeleton) {
