@@ -136,7 +136,7 @@ function main() {
 
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.copy(centre);
-  camera.position.copy(centre).add(new THREE.Vector3(0.55, 2.0, 0.35).multiplyScalar(size * 1.15));
+  camera.position.copy(centre).add(new THREE.Vector3(0.55, 2.0, 0.35).multiplyScalar(size * 1.0));
   controls.update();
 
   const sphere = (radius) => new THREE.SphereGeometry(radius, 16, 12);
