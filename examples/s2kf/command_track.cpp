@@ -4,6 +4,7 @@
 #include "frame_figure.hpp"
 #include "marker_set_json.hpp"
 #include "tracker_samples.hpp"
+#include "viewer/result_page.hpp"  // --html
 
 #include <s2kf/body/pose.hpp>
 #include <s2kf/io/atomic_file.hpp>
@@ -51,6 +52,7 @@ struct TrackSettings {
   bool realtime = false;
   bool quiet = false;
   int jobs = 0;
+  bool html = false;  // also write PREFIX.html, the interactive 3D page (s2kf view)
 };
 
 /// Memory the smoother may take before --smooth refuses a recording (it keeps every frame's
@@ -286,6 +288,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
   if (accuracy) summary["truth"] = truth_json(*accuracy);
   io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
+  if (settings.html) viewer::write_result_page(prefix, session.model, session.mapping, settings.truth);  // --html
 
   std::ostringstream paragraph;
   for (const std::string& message : messages) paragraph << message << "\n";
@@ -432,6 +435,7 @@ const RegisterCommand track_registration{
           "ground-truth motion CSV (s2kf simulate's _truth.csv): adds the accuracy to the summary");
       app.add_flag("--realtime", settings->realtime,
                    "pace frames at the recording's rate and count deadline misses");
+      app.add_flag("--html", settings->html, "also write PREFIX.html: the motion in 3D in a browser (s2kf view)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
       app.add_option("--jobs", settings->jobs, "recordings tracked at once (default: all cores)")
           ->check(CLI::Range(1, 1024));
