@@ -1,0 +1,146 @@
+// The tracking pipeline (track/session.hpp): a session prepared from a C3D file streamed frame by
+// frame equals one prepared from the same recording in memory, rows handed to a sink equal the
+// kept table, and bad recordings are refused with a sentence before any tracking.
+#include "tracker_samples.hpp"
+
+#include <s2kf/io/c3d_frame_source.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/track/session.hpp>
+#include <s2kf/track/state_chart.hpp>
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace s2kf;
+
+std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
+
+body::MarkerSet kit_like_set() { return body::model_marker_set(body::mmm_body_model(1000)); }
+
+TEST(Session, FileAndMemorySourcesGiveTheSameSessionAndRun) {
+  c3d::C3dFrameSource file(data_file("handstand.c3d"));
+  const MarkerSequence all = c3d::read_c3d(data_file("handstand.c3d"));
+  const MarkerSequence head = all.frames(0, 150);
+  SequenceFrameSource memory(head);
+  ASSERT_EQ(file.labels(), head.labels);
+  track::SessionOptions options;
+  options.calibration_frames = 150;
+  const SampleSet& samples = test::tracker_samples();
+  const track::Session from_file = track::prepare_session(file, kit_like_set(), options, samples);
+  // The height estimate reads spread frames of the whole file; give the memory source the same.
+  options.height_mm = from_file.height_mm;
+  const track::Session from_memory = track::prepare_session(memory, kit_like_set(), options, samples);
+  EXPECT_EQ(from_file.markers_used(), 50);
+  ASSERT_TRUE(from_file.calibration.has_value());
+  ASSERT_TRUE(from_memory.calibration.has_value());
+  EXPECT_GT(from_file.height_mm, 1000);
+  EXPECT_NE(from_file.height_source.find("rigid marker pairs"), std::string::npos);
+  for (int m = 0; m < from_file.model.marker_count(); ++m)
+    EXPECT_EQ(from_file.model.markers[m].offset, from_memory.model.markers[m].offset) << m;
+
+  // A sink receives exactly the rows the run would keep.
+  std::vector<Eigen::VectorXd> rows;
+  track::RunHooks hooks;
+  hooks.sink = [&](const track::TrackedFrame& f) { rows.push_back(f.values); };
+  const track::TrackingRun streamed = track::run_session(from_memory, memory, samples, {}, hooks);
+  const track::TrackingRun kept = track::run_session(from_memory, memory, samples);
+  ASSERT_EQ(rows.size(), 150u);
+  ASSERT_EQ(kept.motion.frames(), 150);
+  for (Eigen::Index r = 0; r < 150; ++r)
+    EXPECT_EQ((rows[static_cast<std::size_t>(r)] - kept.motion.values.row(r).transpose()).cwiseAbs().maxCoeff(), 0.0)
+        << r;
+  EXPECT_EQ(streamed.mean_marker_distance, kept.mean_marker_distance);
+  EXPECT_TRUE(std::isfinite(track::calibrated_distance_mm(from_memory, kept)));
+}
+
+TEST(Session, RefusesRecordingsItCannotTrack) {
+  MarkerSequence unknown;
+  unknown.labels = {"A", "B", "C"};
+  unknown.rate_hz = 100;
+  unknown.resize(10);
+  SequenceFrameSource source(unknown);
+  const SampleSet& samples = test::tracker_samples();
+  try {
+    track::prepare_session(source, kit_like_set(), {}, samples);
+    FAIL() << "labels of no marker were accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("none of its 3 point labels"), std::string::npos) << e.what();
+  }
+  MarkerSequence no_rate = c3d::read_c3d(data_file("handstand.c3d")).frames(0, 5);
+  no_rate.rate_hz = 0;
+  SequenceFrameSource zero(no_rate);
+  EXPECT_THROW(track::prepare_session(zero, kit_like_set(), {}, samples), std::invalid_argument);
+
+  // A recording in metres read as mm: a body of about 1.7 mm is not a person's.
+  MarkerSequence metres = c3d::read_c3d(data_file("handstand.c3d")).frames(0, 20);
+  metres.positions /= 1000;
+  SequenceFrameSource tiny(metres);
+  try {
+    track::prepare_session(tiny, kit_like_set(), {}, samples);
+    FAIL() << "a recording in metres was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("is not a person's"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Session, StopsAtCoordinatesBeyondAKilometre) {
+  MarkerSequence recording = c3d::read_c3d(data_file("handstand.c3d")).frames(0, 40);
+  recording.frame(30).col(3) = Eigen::Vector3d(5e6, 0, 0);
+  SequenceFrameSource source(recording);
+  track::SessionOptions options;
+  options.calibrate = false;
+  options.height_mm = 1750;
+  const track::Session session = track::prepare_session(source, kit_like_set(), options, test::tracker_samples());
+  try {
+    track::run_session(session, source, test::tracker_samples());
+    FAIL() << "a point 5 km away was tracked";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("frame 30"), std::string::npos) << e.what();
+  }
+}
+
+// The chart: folding keeps every joint angle and flips the covariance sign of reflected states;
+// to_previous_chart undoes a fold and a reference change.
+TEST(StateChart, FoldingKeepsAnglesAndItsInverseRestoresTheState) {
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const body::BoundedJoints joints(model);
+  const int n = 6 + model.joint_count();
+  Eigen::VectorXd mean = Eigen::VectorXd::LinSpaced(n, -7.0, 9.0);
+  mean.segment<3>(3) << 0.1, -0.2, 0.05;
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Identity(n, n);
+  covariance(6, 7) = covariance(7, 6) = 0.5;
+  const Eigen::VectorXd before = mean;
+  const Eigen::MatrixXd covariance_before = covariance;
+  track::fold_joint_parameters(mean, covariance);
+  for (Eigen::Index k = 6; k < n; ++k) EXPECT_LE(std::abs(mean(k)), kPi / 2 + 1e-12) << k;
+  const Eigen::VectorXd angles_before = joints.angles(before.tail(model.joint_count()));
+  const Eigen::VectorXd angles_after = joints.angles(mean.tail(model.joint_count()));
+  EXPECT_LT((angles_before - angles_after).cwiseAbs().maxCoeff(), 1e-12);
+  // Exactly the reflected states changed sign in the covariance.
+  const bool reflected6 = std::abs(std::remainder(before(6), 2 * kPi)) > kPi / 2;
+  const bool reflected7 = std::abs(std::remainder(before(7), 2 * kPi)) > kPi / 2;
+  EXPECT_EQ(covariance(6, 7), (reflected6 != reflected7 ? -1 : 1) * covariance_before(6, 7));
+
+  // Back into the chart before: the same reference, the unfolded values as the previous mean.
+  const Eigen::Matrix3d reference = body::rotation_exp(Eigen::Vector3d(0.3, 0.1, -0.4));
+  Eigen::VectorXd restored = mean;
+  Eigen::MatrixXd restored_covariance = covariance;
+  track::to_previous_chart(reference, reference, before, restored, restored_covariance);
+  EXPECT_LT((restored.tail(model.joint_count()) - before.tail(model.joint_count())).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((restored_covariance - covariance_before).cwiseAbs().maxCoeff(), 1e-15);
+  // A reference change moves the orientation error so that the rotation stays the same.
+  const Eigen::Matrix3d next = reference * body::rotation_exp(Eigen::Vector3d(0.02, 0.0, 0.01));
+  Eigen::VectorXd moved = mean;
+  track::to_previous_chart(reference, next, before, moved, restored_covariance);
+  EXPECT_LT((track::chart_rotation(reference, moved.segment<3>(3)) -
+             track::chart_rotation(next, mean.segment<3>(3)))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-12);
+}
+
+}  // namespace
