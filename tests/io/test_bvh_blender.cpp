@@ -109,7 +109,7 @@ TEST(Bvh, CentimetreFilesAreTheMetreFilesTimesAHundred) {
   io::write_bvh(metres, model, motion, 100, io::BvhUnits::metres);
   io::write_bvh(centimetres, model, motion, 100, io::BvhUnits::centimetres);
   // Offsets and root positions scale; angles do not.
-  const std::regex offset(R"(OFFSET (\S+) (\S+) (\S+))");
+  const std::regex offset(R"re(OFFSET (\S+) (\S+) (\S+))re");
   const std::string m = metres.str(), cm = centimetres.str();
   std::sregex_iterator a(m.begin(), m.end(), offset), b(cm.begin(), cm.end(), offset), end;
   int offsets = 0;
