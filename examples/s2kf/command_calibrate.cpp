@@ -2,6 +2,7 @@
 // recording of that subject, and write it as a marker-set file `s2kf track --subject` loads.
 #include "calibration_hook.hpp"
 #include "command.hpp"
+#include "extra_outputs.hpp"
 #include "marker_set_json.hpp"
 #include "subject_height.hpp"
 
@@ -91,7 +92,9 @@ void run_calibrate(const CalibrateSettings& settings) {
                             " mm before, " + fixed(calibration.mean_marker_distance_after_mm, 1) +
                             " mm after";
   if (fs::path(settings.out).has_parent_path()) fs::create_directories(fs::path(settings.out).parent_path());
+  const auto osim = prepare_subject_opensim_model(settings.out, calibration.model, choice.mapping);  // SUBJECT.osim
   io::write_file_atomically(settings.out, [&](std::ostream& out) { out << document.dump(2) << "\n"; });
+  osim->commit();
   fs::path report = settings.out;
   report.replace_extension();
   const std::string report_path = report.string() + "_report.json";
@@ -117,7 +120,8 @@ void run_calibrate(const CalibrateSettings& settings) {
             << height_source << "); mean marker distance "
             << fixed(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
             << fixed(calibration.mean_marker_distance_after_mm, 1) << " mm after " << settings.iterations
-            << " calibration iteration(s).\nWrote " << settings.out << " and " << report_path << ".\n";
+            << " calibration iteration(s).\nWrote " << settings.out << ", " << osim->path().string() << " and "
+            << report_path << ".\n";
 }
 
 const RegisterCommand calibrate_registration{

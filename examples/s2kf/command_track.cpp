@@ -2,6 +2,7 @@
 // .mot, BVH, a JSON summary and a per-frame marker report.
 #include "calibration_hook.hpp"
 #include "command.hpp"
+#include "extra_outputs.hpp"
 #include "frame_figure.hpp"
 #include "marker_set_json.hpp"
 #include "subject_height.hpp"
@@ -55,6 +56,7 @@ struct TrackSettings {
   bool realtime = false;
   bool quiet = false;
   int jobs = 0;
+  OutputSettings outputs;  // --formats, --bvh-units, --derivatives (extra_outputs.hpp)
 };
 
 /// Memory the smoother may take before --smooth refuses a recording (it keeps every frame's
@@ -237,8 +239,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   // it is tracked (memory stays constant however long the recording is); the smoother needs every
   // frame, so with --smooth the table is kept and written after smoothing.
   const std::string name = fs::path(input).stem().string();
-  io::MotionStreamWriter motion_files({prefix + ".csv", prefix + ".mot", prefix + ".bvh"}, model, info.rate,
-                                      name);
+  io::MotionStreamWriter motion_files(motion_file_paths(prefix, settings.outputs), model, info.rate, name,
+                                      bvh_units(settings.outputs));
+  write_model_outputs(motion_files, settings.outputs, prefix, input, model, mapping);  // .osim, .trc
   io::AtomicFileWriter marker_report(prefix + "_markers.csv");
   write_marker_report_header(marker_report.stream());
   std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
@@ -405,7 +408,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
               << format(accuracy->root_position_rms_mm, 1) << " mm.";
   if (!warnings.empty())
     paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
-  paragraph << "\nWrote " << prefix << ".csv, .mot, .bvh, .json and _markers.csv";
+  paragraph << "\n" << written_files_sentence(prefix, settings.outputs);
   if (!figure_file.empty()) paragraph << ", and the figure " << figure_file;
   paragraph << ".";
   return {summary, paragraph.str()};
@@ -444,6 +447,7 @@ void run_track(const TrackSettings& settings) {
   if (batch && !settings.truth.empty())
     throw UserError("--truth belongs to one recording; track that recording on its own");
   const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
+  check_outputs(settings.outputs, output_prefixes(files, settings.out), !settings.truth.empty());
   if (!batch) {
     const std::string prefix = settings.out.empty() ? fs::path(files[0]).stem().string() : settings.out;
     if (fs::path(prefix).has_parent_path()) fs::create_directories(fs::path(prefix).parent_path());
@@ -517,6 +521,7 @@ const RegisterCommand track_registration{
       app.add_flag("--realtime", settings->realtime,
                    "pace frames at the recording's rate and count deadline misses");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
+      add_output_options(app, settings->outputs);
       app.add_option("--jobs", settings->jobs, "recordings tracked at once (default: all cores)")
           ->check(CLI::Range(1, 1024));
       app.callback([settings] { run_track(*settings); });
