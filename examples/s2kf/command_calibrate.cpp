@@ -1,6 +1,7 @@
 // `s2kf calibrate`: estimate a subject (body height, bone lengths, where each marker sits) from a
 // recording of that subject, and write it as a marker-set file `s2kf track --subject` loads.
 #include "command.hpp"
+#include "extra_outputs.hpp"
 #include "marker_set_json.hpp"
 #include "tracker_samples.hpp"
 
@@ -88,7 +89,9 @@ void run_calibrate(const CalibrateSettings& settings) {
                             " mm before, " + fixed(calibration.mean_marker_distance_after_mm, 1) +
                             " mm after";
   if (fs::path(settings.out).has_parent_path()) fs::create_directories(fs::path(settings.out).parent_path());
+  const auto osim = prepare_subject_opensim_model(settings.out, calibration.model, session.mapping);  // SUBJECT.osim
   io::write_file_atomically(settings.out, [&](std::ostream& out) { out << document.dump(2) << "\n"; });
+  osim->commit();
   fs::path report = settings.out;
   report.replace_extension();
   const std::string report_path = report.string() + "_report.json";
@@ -114,7 +117,8 @@ void run_calibrate(const CalibrateSettings& settings) {
             << height_source << "); mean marker distance "
             << fixed(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
             << fixed(calibration.mean_marker_distance_after_mm, 1) << " mm after " << settings.iterations
-            << " calibration iteration(s).\nWrote " << settings.out << " and " << report_path << ".\n";
+            << " calibration iteration(s).\nWrote " << settings.out << ", " << osim->path().string() << " and "
+            << report_path << ".\n";
 }
 
 const RegisterCommand calibrate_registration{

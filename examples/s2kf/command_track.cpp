@@ -1,6 +1,7 @@
 // `s2kf track`: stream C3D recordings through the S2KF tracker and write the motion as CSV, OpenSim
 // .mot, BVH, a JSON summary and a per-frame marker report.
 #include "command.hpp"
+#include "extra_outputs.hpp"
 #include "frame_figure.hpp"
 #include "marker_set_json.hpp"
 #include "tracker_samples.hpp"
@@ -53,6 +54,7 @@ struct TrackSettings {
   bool quiet = false;
   int jobs = 0;
   bool html = false;  // also write PREFIX.html, the interactive 3D page (s2kf view)
+  OutputSettings outputs;  // --formats, --bvh-units, --derivatives (extra_outputs.hpp)
 };
 
 /// Memory the smoother may take before --smooth refuses a recording (it keeps every frame's
@@ -195,8 +197,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   // as tracked (memory stays constant however long the recording is), or after the backward pass
   // with --smooth.
   const std::string name = fs::path(input).stem().string();
-  io::MotionStreamWriter motion_files({prefix + ".csv", prefix + ".mot", prefix + ".bvh"}, session.model, info.rate,
-                                      name);
+  io::MotionStreamWriter motion_files(motion_file_paths(prefix, settings.outputs), session.model, info.rate, name,
+                                      bvh_units(settings.outputs));
+  write_model_outputs(motion_files, settings.outputs, prefix, input, session.model, session.mapping);  // .osim, .trc
   io::AtomicFileWriter marker_report(prefix + "_markers.csv");
   write_marker_report_header(marker_report.stream());
   std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
@@ -323,8 +326,10 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
               << format(accuracy->segment_orientation_rms_deg, 2) << " deg, limb flexion "
               << format(accuracy->limb_flexion_rms_deg, 2) << " deg, root position "
               << format(accuracy->root_position_rms_mm, 1) << " mm.";
-  if (!warnings.empty()) paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
-  paragraph << "\nWrote " << prefix << ".csv, .mot, .bvh, .json and _markers.csv";
+  if (!warnings.empty())
+    paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
+  paragraph << "\n" << written_files_sentence(prefix, settings.outputs);
+  if (settings.html) paragraph << ", the 3D page " << prefix << ".html";
   if (!figure_file.empty()) paragraph << ", and the figure " << figure_file;
   paragraph << ".";
   return {summary, paragraph.str()};
@@ -363,6 +368,7 @@ void run_track(const TrackSettings& settings) {
   if (batch && !settings.truth.empty())
     throw UserError("--truth belongs to one recording; track that recording on its own");
   const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
+  check_outputs(settings.outputs, output_prefixes(files, settings.out), !settings.truth.empty());
   if (!batch) {
     const std::string prefix = settings.out.empty() ? fs::path(files[0]).stem().string() : settings.out;
     if (fs::path(prefix).has_parent_path()) fs::create_directories(fs::path(prefix).parent_path());
@@ -437,6 +443,7 @@ const RegisterCommand track_registration{
                    "pace frames at the recording's rate and count deadline misses");
       app.add_flag("--html", settings->html, "also write PREFIX.html: the motion in 3D in a browser (s2kf view)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
+      add_output_options(app, settings->outputs);
       app.add_option("--jobs", settings->jobs, "recordings tracked at once (default: all cores)")
           ->check(CLI::Range(1, 1024));
       app.callback([settings] { run_track(*settings); });

@@ -21,17 +21,30 @@
 
 namespace s2kf::io {
 
+/// The length unit of a BVH file. BVH itself has no unit field; Blender's importer reads the numbers
+/// as metres at its default scale 1.0, so metres is the default (centimetres are MotionBuilder's habit).
+enum class BvhUnits { metres, centimetres };
+
+/// "m" or "cm".
+inline const char* bvh_units_name(BvhUnits units) { return units == BvhUnits::metres ? "m" : "cm"; }
+
+/// Millimetres per file unit.
+inline double bvh_millimetres_per_unit(BvhUnits units) { return units == BvhUnits::metres ? 1000.0 : 10.0; }
+
 /// The BVH skeleton of a body model: its hierarchy text and how a motion row becomes a line of
 /// channel values. write_bvh and MotionStreamWriter both write through it.
 ///
-/// BVH is Y-up and these files are in centimetres: a model point (x right, y forward, z up, mm)
-/// becomes (x, z, -y) / 10. The same change of basis turns a rotation about the model's x, z, y axes
+/// BVH is Y-up and these files are in metres (or centimetres, BvhUnits): a model point (x right,
+/// y forward, z up, mm) becomes (x, z, -y) / 1000 (or / 10). Joints are the anatomical groups
+/// (BP, BT, BLN, BUN, LS, LE, LW, RS, ..., RA) under the root "pelvis"; all channels 0 is the model's
+/// zero pose, so the rest pose Blender shows is that pose. The same change of basis turns a rotation about the model's x, z, y axes
 /// into one about BVH's X, Y, -Z, so every joint group keeps its x-z-y order as channels
 /// "Xrotation Yrotation Zrotation" with values (qx, qz, -qy) in degrees. The root's
 /// Rz(yaw) Ry(pitch) Rx(roll) becomes "Yrotation Zrotation Xrotation" = (yaw, -pitch, roll).
 class BvhSkeleton {
  public:
-  explicit BvhSkeleton(const body::BodyModel& model) {
+  explicit BvhSkeleton(const body::BodyModel& model, BvhUnits units = BvhUnits::metres)
+      : millimetres_per_unit_(bvh_millimetres_per_unit(units)) {
     for (const body::Joint& joint : model.joints) axes_.push_back(joint.axis);
     // One BVH joint per anatomical group (BP, BT, LS, ...): its DoFs are consecutive joints.
     std::vector<int> group_of_joint(model.joint_count(), -1);
@@ -57,7 +70,8 @@ class BvhSkeleton {
       if (g.parent >= 0) has_child[g.parent] = true;
 
     std::ostringstream out;
-    out << std::fixed << std::setprecision(4) << "HIERARCHY\nROOT pelvis\n{\n  OFFSET 0 0 0\n"
+    // 6 decimals: a micrometre in metres, well below any marker's noise.
+    out << std::fixed << std::setprecision(6) << "HIERARCHY\nROOT pelvis\n{\n  OFFSET 0 0 0\n"
         << "  CHANNELS 6 Xposition Yposition Zposition Yrotation Zrotation Xrotation\n";
     const std::function<void(int, int)> write_group = [&](int g, int depth) {
       const std::string pad(2 * depth, ' ');
@@ -96,18 +110,19 @@ class BvhSkeleton {
   /// "HIERARCHY" up to the closing brace of the root.
   void write_hierarchy(std::ostream& out) const { out << hierarchy_; }
 
-  /// "MOTION", the frame count and the frame time.
+  /// "MOTION", the frame count and the frame time (s). 12 decimals: importers take the rate as
+  /// 1 / Frame Time, and 8 decimals made 120 Hz read as 120.00005 Hz.
   static void write_motion_header(std::ostream& out, long frames, double rate_hz) {
-    out << std::fixed << "MOTION\nFrames: " << frames << "\nFrame Time: " << std::setprecision(8)
+    out << std::fixed << "MOTION\nFrames: " << frames << "\nFrame Time: " << std::setprecision(12)
         << 1.0 / rate_hz << "\n";
   }
 
-  /// One frame line: the root's 6 channels, then 3 per joint group (fixed, 4 decimals). `values`
+  /// One frame line: the root's 6 channels, then 3 per joint group (fixed, 6 decimals). `values`
   /// must be finite (BVH has no missing frames: write_bvh repeats a tracked row instead).
   void write_row(std::ostream& out, const MotionRowRef& values) const {
     const double degrees = kDegreesPerRadian;
     const Eigen::Vector3d position = to_bvh(values.head<3>());
-    out << std::fixed << std::setprecision(4) << position.x() << " " << position.y() << " " << position.z()
+    out << std::fixed << std::setprecision(6) << position.x() << " " << position.y() << " " << position.z()
         << " " << values(5) * degrees << " " << -values(4) * degrees << " " << values(3) * degrees;
     for (int g : order_) {
       double channel[3] = {0, 0, 0};  // X, Y, Z
@@ -138,10 +153,11 @@ class BvhSkeleton {
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   };
 
-  static Eigen::Vector3d to_bvh(const Eigen::Vector3d& v) {
-    return Eigen::Vector3d(v.x(), v.z(), -v.y()) / 10.0;
+  Eigen::Vector3d to_bvh(const Eigen::Vector3d& v) const {
+    return Eigen::Vector3d(v.x(), v.z(), -v.y()) / millimetres_per_unit_;
   }
 
+  double millimetres_per_unit_;
   std::vector<body::Axis> axes_;
   std::vector<Group> groups_;
   std::vector<int> order_;  // groups in the order their channels appear
@@ -153,11 +169,11 @@ class BvhSkeleton {
 /// tracked pose, since BVH has no notion of a missing frame; a motion without any tracked frame is
 /// written as the rest pose.
 inline void write_bvh(std::ostream& out, const body::BodyModel& model, const MotionTable& motion,
-                      double rate_hz) {
+                      double rate_hz, BvhUnits units = BvhUnits::metres) {
   motion.check();
   if (static_cast<int>(motion.joint_names.size()) != model.joint_count())
     throw std::invalid_argument("write_bvh: the motion's joints do not match the body model");
-  const BvhSkeleton skeleton(model);
+  const BvhSkeleton skeleton(model, units);
   skeleton.write_hierarchy(out);
   BvhSkeleton::write_motion_header(out, static_cast<long>(motion.frames()), rate_hz);
   Eigen::Index first_tracked = -1;
@@ -175,8 +191,8 @@ inline void write_bvh(std::ostream& out, const body::BodyModel& model, const Mot
 }
 
 inline void save_bvh(const std::string& path, const body::BodyModel& model, const MotionTable& motion,
-                     double rate_hz) {
-  write_file_atomically(path, [&](std::ostream& out) { write_bvh(out, model, motion, rate_hz); });
+                     double rate_hz, BvhUnits units = BvhUnits::metres) {
+  write_file_atomically(path, [&](std::ostream& out) { write_bvh(out, model, motion, rate_hz, units); });
 }
 
 }  // namespace s2kf::io
