@@ -159,10 +159,12 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     throw UserError(input + ": " + e.what());
   }
   // Model outputs never match a marker; the summary lists them under their names in the file.
+  // (ignored labels keep the file's order, so the k-th empty one is the k-th model output).
+  auto empty = session.mapping.ignored_labels.begin();
   for (const c3d::PointLabel& label : info.labels)
     if (label.model_output) {
-      auto& ignored = session.mapping.ignored_labels;
-      std::replace(ignored.begin(), ignored.end(), std::string(), label.raw);
+      empty = std::find(empty, session.mapping.ignored_labels.end(), std::string());
+      if (empty != session.mapping.ignored_labels.end()) *empty++ = label.raw;
     }
   std::vector<std::string> warnings = info.warnings;
   warnings.insert(warnings.end(), session.warnings.begin(), session.warnings.end());

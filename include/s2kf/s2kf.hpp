@@ -34,8 +34,12 @@
 #include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/marker_sequence.hpp>
+#include <s2kf/io/mmm_motion.hpp>
+#include <s2kf/io/motion_derivatives.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
+#include <s2kf/io/opensim_model.hpp>
+#include <s2kf/io/trc_file.hpp>
 
 #include <s2kf/sim/keyframe_motion.hpp>
 #include <s2kf/sim/monotone_cubic.hpp>

@@ -281,11 +281,12 @@ TEST(MarkerJacobian, MatchesCentralDifferences) {
 // A pose is sized by its model: one with a joint too many is refused, never read past its end.
 TEST(ForwardKinematics, RefusesAPoseSizedForAnotherModel) {
   const s2kf::body::BodyModel model = s2kf::body::mmm_body_model(1750);
-  s2kf::body::Pose pose = s2kf::body::zero_pose(model);
+  const s2kf::body::Pose pose = s2kf::body::zero_pose(model);
   EXPECT_EQ(pose.joints.size(), model.joint_count());
   EXPECT_NO_THROW(s2kf::body::marker_positions(model, pose));
-  pose.joints = Eigen::VectorXd::Zero(model.joint_count() + 1);
-  EXPECT_THROW(s2kf::body::marker_positions(model, pose), s2kf::DimensionError);
+  const s2kf::body::Pose too_many{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                  Eigen::VectorXd::Zero(model.joint_count() + 1)};
+  EXPECT_THROW(s2kf::body::marker_positions(model, too_many), s2kf::DimensionError);
   EXPECT_EQ(s2kf::body::pose_from_row(s2kf::body::pose_row(s2kf::body::zero_pose(model))).joints.size(),
             model.joint_count());
 }

@@ -344,7 +344,7 @@ TEST(Evaluation, TruthThatDoesNotFitIsRejected) {
 TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
   const fs::path out = fresh_scratch("evaluate_short");
   const CommandResult result =
-      run_command("evaluate --frames 60 --runs 2 --samples 93 --quiet --out " + out.string());
+      run_command("evaluate --frames 60 --runs 2 --samples 93 --no-calibrate --quiet --out " + out.string());
   ASSERT_EQ(result.status, 0) << result.output;
   for (const char* name : {"marker_distance.csv", "occlusion_band.csv", "hidden_markers.csv", "runtime.csv",
                            "joint_error.csv", "samples.csv", "summary.json"})
@@ -378,6 +378,9 @@ TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
               s2kf.truth->segment_orientation_rms_deg, 1e-9);
   EXPECT_EQ(json_number(summary, "frames"), 60);
   EXPECT_EQ(json_number(summary, "runs"), 2);
+  // Prepared as s2kf track prepares it: the bundled set chosen by the labels, not calibrated here.
+  EXPECT_NE(summary.find("\"marker_set\": \"kit\""), std::string::npos);
+  EXPECT_NE(summary.find("\"calibrated\": false"), std::string::npos);
 }
 
 TEST(EvaluateCommand, BadInputGivesASentenceAndExitStatusOne) {

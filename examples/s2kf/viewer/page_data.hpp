@@ -88,11 +88,7 @@ inline void append_float(std::string& bytes, double value) {
 }
 
 inline body::Pose pose_of(const io::MotionRowRef& values) {
-  body::Pose pose;
-  pose.root_position = values.head<3>();
-  pose.root_rpy = values.segment<3>(3);
-  pose.joints = values.tail(values.size() - 6);
-  return pose;
+  return body::pose_from_row(values);
 }
 }  // namespace detail
 

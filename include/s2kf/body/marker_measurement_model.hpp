@@ -84,13 +84,10 @@ class MarkerMeasurementModel {
   /// The pose a state stands for (joint angles through the bounded map).
   Pose pose(const Eigen::Ref<const Eigen::VectorXd>& state) const {
     check_state_size(state.size(), "pose");
-    Pose result;
-    result.root_position = state.head<3>();
-    result.root_rpy = orientation_ == OrientationParameterization::roll_pitch_yaw
-                          ? Eigen::Vector3d(state.segment<3>(3))
-                          : rpy_from_rotation(root_rotation(state.segment<3>(3)));
-    result.joints = joints_.angles(state.tail(model_.joint_count()));
-    return result;
+    const Eigen::Vector3d rpy = orientation_ == OrientationParameterization::roll_pitch_yaw
+                                    ? Eigen::Vector3d(state.segment<3>(3))
+                                    : rpy_from_rotation(root_rotation(state.segment<3>(3)));
+    return Pose{state.head<3>(), rpy, joints_.angles(state.tail(model_.joint_count()))};
   }
 
   /// A state that stands for `pose` (Theta on the principal branch; delta = Log(R_ref^T R)).

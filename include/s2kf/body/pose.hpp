@@ -81,9 +81,7 @@ struct Pose {
 
 /// The zero pose of a model: root at the origin, every joint angle 0.
 inline Pose zero_pose(const BodyModel& model) {
-  Pose pose;
-  pose.joints = Eigen::VectorXd::Zero(model.joint_count());
-  return pose;
+  return Pose{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::VectorXd::Zero(model.joint_count())};
 }
 
 /// Number of values of a pose row before the joints: root position (3) and roll, pitch, yaw (3).
@@ -105,11 +103,7 @@ inline Eigen::VectorXd pose_row(const Pose& pose) {
 
 /// The pose of a motion-table row (the inverse of pose_row).
 inline Pose pose_from_row(const Eigen::Ref<const Eigen::VectorXd>& row) {
-  Pose pose;
-  pose.root_position = row.head<3>();
-  pose.root_rpy = row.segment<3>(3);
-  pose.joints = row.tail(row.size() - kRootValues);
-  return pose;
+  return Pose{row.head<3>(), row.segment<3>(3), row.tail(row.size() - kRootValues)};
 }
 
 /// The column names of a pose table (CSV) with these joints: frame, time (s), root_x, root_y,

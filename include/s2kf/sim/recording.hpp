@@ -51,11 +51,7 @@ enum class RandomStream : std::uint64_t { noise = 2, occlusion = 3 };  // the su
 /// The pose of a subject of `height_mm` for a motion sample (root translation scaled from the
 /// reference height).
 inline body::Pose pose_from_sample(const MotionSample& sample, double height_mm) {
-  body::Pose pose;
-  pose.root_position = sample.root_position * (height_mm / kReferenceHeightMm);
-  pose.root_rpy = sample.root_rpy;
-  pose.joints = sample.joints;
-  return pose;
+  return body::Pose{sample.root_position * (height_mm / kReferenceHeightMm), sample.root_rpy, sample.joints};
 }
 
 /// Plays `motion` on `subject` and measures it. `seed` drives the sensor noise and the occlusion

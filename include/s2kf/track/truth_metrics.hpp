@@ -35,11 +35,7 @@ struct TruthComparison {
 };
 
 inline body::Pose pose_of_row(const io::MotionTable& motion, Eigen::Index row) {
-  body::Pose pose;
-  pose.root_position = motion.values.row(row).segment<3>(0).transpose();
-  pose.root_rpy = motion.values.row(row).segment<3>(3).transpose();
-  pose.joints = motion.values.row(row).tail(body::kJointCount).transpose();
-  return pose;
+  return body::pose_from_row(motion.values.row(row).transpose());
 }
 
 /// Compares frame by frame (rows with the same index) from `warmup` on. The joint columns of both
