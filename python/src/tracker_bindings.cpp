@@ -1,0 +1,156 @@
+/// @file
+/// s2kf.Tracker: the whole-body tracker fed one frame at a time from Python (live systems), and
+/// s2kf.FrameEstimate, what it reports per frame. The per-frame path copies the frame into buffers
+/// the tracker reuses and runs the filter without the GIL, so it costs what C++ costs plus the
+/// conversion of one (P, 3) array and the estimate's few small arrays (measured in docs/python.md).
+#include "bindings.hpp"
+#include "numpy_bridge.hpp"
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/tracker.hpp>
+#include <s2kf/track/tracker_options.hpp>
+
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace s2kf::python {
+namespace {
+
+/// A tracker and the frame buffers it is fed from (sized once: no allocation per frame).
+class StreamingTracker {
+ public:
+  StreamingTracker(const std::vector<std::string>& labels, double rate, const body::BodyModel& model,
+                   track::TrackerOptions options) {
+    if (!(rate > 0) || !std::isfinite(rate))
+      throw py::value_error("the frame rate must be a positive number of Hz, got " + std::to_string(rate));
+    model.validate();
+    const track::MarkerMapping mapping = track::map_markers(labels, model.marker_names());
+    if (mapping.markers_used() == 0)
+      throw py::value_error("none of the " + std::to_string(labels.size()) +
+                            " labels is a marker of the body model (expected names such as LASI, RKNE, C7)");
+    py::gil_scoped_release unlocked;  // the sample set may be computed (seconds) on first use
+    tracker_ = std::make_unique<track::Tracker>(model, mapping, std::move(options), rate);
+    points_.resize(3, static_cast<Eigen::Index>(labels.size()));
+    visible_.resize(static_cast<Eigen::Index>(labels.size()));
+  }
+
+  track::FrameEstimate process(const py::handle& frame_value, const py::handle& visible_value) {
+    const Eigen::Index count = points_.cols();
+    const DoubleArray frame = as_double_array(frame_value, "frame");
+    require_shape(frame, {count, 3}, "frame", "(P, 3) with P = " + std::to_string(count) + " labels");
+    // C-ordered (P, 3) is the tracker's column-major 3 x P.
+    std::copy(frame.data(), frame.data() + 3 * count, points_.data());
+    if (visible_value.is_none()) {
+      visible_.setConstant(true);  // the tracker treats NaN coordinates as hidden
+    } else {
+      const auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(visible_value);
+      if (!mask || mask.ndim() != 1 || mask.shape(0) != count)
+        throw py::value_error("visible must be one bool per point (" + std::to_string(count) + ")");
+      std::copy(mask.data(), mask.data() + count, visible_.data());
+    }
+    py::gil_scoped_release unlocked;
+    return tracker_->process(points_, visible_);
+  }
+
+  const track::Tracker& tracker() const { return *tracker_; }
+
+ private:
+  std::unique_ptr<track::Tracker> tracker_;
+  Eigen::Matrix3Xd points_;
+  Eigen::Array<bool, Eigen::Dynamic, 1> visible_;
+};
+
+track::TrackerOptions tracker_options(const std::string& preset, double rate, int samples, double marker_noise_mm,
+                                      double gate_probability) {
+  track::TrackerOptions options;
+  try {
+    options = track::preset_options(preset, rate);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  if (samples > 0) options.samples = samples;
+  if (marker_noise_mm > 0) options.marker_noise_mm = marker_noise_mm;
+  options.gate_probability = gate_probability;
+  options.validate();
+  return options;
+}
+
+py::array_t<double> pose_row(const body::Pose& pose) {
+  py::array_t<double> out(6 + pose.joints.size());
+  double* row = out.mutable_data();
+  for (int k = 0; k < 3; ++k) row[k] = pose.root_position(k), row[3 + k] = pose.root_rpy(k);
+  std::copy(pose.joints.data(), pose.joints.data() + pose.joints.size(), row + 6);
+  return out;
+}
+
+}  // namespace
+
+void bind_tracker(py::module_& module) {
+  using track::FrameEstimate;
+  py::class_<FrameEstimate>(module, "FrameEstimate", "What the tracker knows after one frame (arrays are copies).")
+      .def_readonly("tracked", &FrameEstimate::tracked, "False before the first frame with enough markers")
+      .def_property_readonly("status", [](const FrameEstimate& e) { return std::string(to_string(e.status)); })
+      .def_property_readonly(
+          "root_position", [](const FrameEstimate& e) { return vector_copy(e.pose.root_position); }, "(3,) mm")
+      .def_property_readonly(
+          "root_rpy", [](const FrameEstimate& e) { return vector_copy(e.pose.root_rpy); }, "(3,) roll, pitch, yaw, rad")
+      .def_property_readonly(
+          "joints", [](const FrameEstimate& e) { return vector_copy(e.pose.joints); }, "(40,) rad")
+      .def_property_readonly(
+          "pose", [](const FrameEstimate& e) { return pose_row(e.pose); },
+          "(46,) root x, y, z, roll, pitch, yaw, joints: a row of the motion table")
+      .def_property_readonly(
+          "root_rotation", [](const FrameEstimate& e) { return matrix_copy(e.root_rotation); }, "(3, 3)")
+      .def_property_readonly(
+          "covariance", [](const FrameEstimate& e) { return matrix_copy(e.covariance); },
+          "(46, 46): root position (mm), orientation error (rad), joint parameters Theta")
+      .def_property_readonly(
+          "predicted_markers", [](const FrameEstimate& e) { return points_copy(e.predicted_markers); },
+          "(M, 3) every model marker at the estimate, mm")
+      .def_property_readonly(
+          "marker_distance", [](const FrameEstimate& e) { return vector_copy(e.marker_distance); },
+          "(M,) mm per model marker, NaN where not observed")
+      .def_readonly("mean_marker_distance", &FrameEstimate::mean_marker_distance, "mm")
+      .def_readonly("visible_markers", &FrameEstimate::visible_markers)
+      .def_readonly("nis", &FrameEstimate::nis)
+      .def_readonly("seconds", &FrameEstimate::seconds, "time spent in the C++ tracker");
+
+  py::class_<StreamingTracker>(module, "Tracker",
+                               "The whole-body S2KF tracker, one frame at a time. `labels` name the points of "
+                               "each frame, matched to the model's markers by name (KIT names).")
+      .def(py::init([](const std::vector<std::string>& labels, double rate, const body::BodyModel* model,
+                       int samples, const std::string& preset, double marker_noise_mm, double gate_probability) {
+             const track::TrackerOptions options =
+                 tracker_options(preset, rate, samples, marker_noise_mm, gate_probability);
+             return std::make_unique<StreamingTracker>(labels, rate, model ? *model : body::mmm_body_model(1750),
+                                                       options);
+           }),
+           py::arg("labels"), py::arg("rate"), py::arg("model") = nullptr, py::arg("samples") = 301,
+           py::arg("preset") = "default", py::arg("marker_noise_mm") = 0.0, py::arg("gate_probability") = 0.0,
+           "labels: one per point; rate: Hz; model: a BodyModel (default: 1750 mm); samples: S2KF sample "
+           "count; preset: 'default' or 'paper'; marker_noise_mm: 0 keeps the preset's")
+      .def("process", &StreamingTracker::process, py::arg("frame"), py::arg("visible") = py::none(),
+           "One frame: (P, 3) mm in label order (NaN: hidden), optional (P,) visibility. Returns a "
+           "FrameEstimate. Runs without the GIL.")
+      .def_property_readonly("model", [](const StreamingTracker& t) { return t.tracker().model(); })
+      .def_property_readonly("joint_names", [](const StreamingTracker& t) { return t.tracker().model().joint_names(); })
+      .def_property_readonly("markers_used",
+                             [](const StreamingTracker& t) {
+                               std::vector<std::string> names;
+                               for (int m : t.tracker().used_markers())
+                                 names.push_back(t.tracker().model().markers[m].name);
+                               return names;
+                             })
+      .def_property_readonly("ignored_labels",
+                             [](const StreamingTracker& t) { return t.tracker().mapping().ignored_labels; })
+      .def_property_readonly("samples", [](const StreamingTracker& t) { return t.tracker().options().samples; })
+      .def_property_readonly("initialised", [](const StreamingTracker& t) { return t.tracker().initialised(); })
+      .def_property_readonly("frames_processed",
+                             [](const StreamingTracker& t) { return t.tracker().frames_processed(); });
+}
+
+}  // namespace s2kf::python
