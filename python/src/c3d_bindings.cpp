@@ -118,7 +118,10 @@ void bind_c3d(py::module_& module) {
       .def_property_readonly(
           "warnings", [](const C3dData& d) { return d.recording.info.warnings; },
           "what the reader had to work around")
-      .def_property_readonly("units", [](const C3dData& d) { return d.recording.info.units; })
+      .def_property_readonly("units", [](const C3dData& d) { return d.recording.info.units; }, "POINT:UNITS as stored")
+      .def_property_readonly(
+          "to_mm", [](const C3dData& d) { return d.recording.info.to_mm; },
+          "the factor that turned the stored coordinates into mm")
       .def_property_readonly("first_frame", [](const C3dData& d) { return d.recording.info.first_frame; })
       .def("__iter__",
            [](py::object self) {
