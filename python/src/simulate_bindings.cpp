@@ -28,13 +28,10 @@ namespace fs = std::filesystem;
 /// A simulation's arrays in the module's layout: points and clean (F, M, 3), visible (F, M),
 /// truth (F, 46) rows of the motion table.
 struct Simulation {
-  std::string motion_name;
-  double rate = 0;
-  std::vector<std::string> labels, joint_names;
-  Eigen::MatrixXd measured, clean;                             // 3M x F
-  Eigen::MatrixXd truth;                                       // 46 x F
-  Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> visible;  // M x F
-  double hidden_fraction = 0;
+  sim::Recording recording;  // the measured markers (MarkerSequence: 3M x F, NaN where hidden)
+  std::vector<std::string> joint_names;
+  Eigen::MatrixXd clean;  // 3M x F
+  Eigen::MatrixXd truth;  // 46 x F
 };
 
 std::vector<std::string> bundled_motions() {
@@ -110,26 +107,20 @@ Simulation simulate(const std::string& motion_name, std::uint64_t seed, double h
   }
 
   Simulation out;
-  out.motion_name = recording.motion_name;
-  out.rate = recording.frame_rate;
-  out.labels = recording.marker_names;
   out.joint_names = subject.joint_names;
   const Eigen::Index count = recording.frames(), markers = recording.markers();
   const Eigen::Index columns = 6 + static_cast<Eigen::Index>(subject.joint_names.size());
-  out.measured.resize(3 * markers, count);
   out.clean.resize(3 * markers, count);
   out.truth.resize(columns, count);
   for (Eigen::Index k = 0; k < count; ++k) {
     const auto f = static_cast<std::size_t>(k);
-    out.measured.col(k) = Eigen::Map<const Eigen::VectorXd>(recording.measured[f].data(), 3 * markers);
     out.clean.col(k) = Eigen::Map<const Eigen::VectorXd>(recording.clean[f].data(), 3 * markers);
-    const body::Pose& pose = recording.truth[f];
-    out.truth.col(k).head<3>() = pose.root_position;
-    out.truth.col(k).segment<3>(3) = pose.root_rpy;
-    out.truth.col(k).tail(columns - 6) = pose.joints;
+    out.truth.col(k) = body::pose_row(recording.truth[f]);
   }
-  out.visible = recording.visible;
-  out.hidden_fraction = recording.hidden_fraction();
+  out.recording = std::move(recording);
+  // The per-frame copies are in `clean` and `truth` now; keep only the marker data.
+  out.recording.clean.clear();
+  out.recording.truth.clear();
   return out;
 }
 
@@ -144,13 +135,15 @@ py::array_t<double> frames_view(py::object self, const Eigen::MatrixXd& matrix, 
 void bind_simulate(py::module_& module) {
   py::class_<Simulation>(module, "Simulation",
                          "A synthetic recording with its truth. Unpacks as (labels, rate, points) like read_c3d.")
-      .def_readonly("motion_name", &Simulation::motion_name)
-      .def_readonly("rate", &Simulation::rate)
-      .def_readonly("labels", &Simulation::labels, "the model's 50 marker names")
-      .def_readonly("joint_names", &Simulation::joint_names)
-      .def_readonly("hidden_fraction", &Simulation::hidden_fraction)
+      .def_property_readonly("motion_name", [](const Simulation& s) { return s.recording.motion_name; })
+      .def_property_readonly("rate", [](const Simulation& s) { return s.recording.rate_hz; })
       .def_property_readonly(
-          "points", [](py::object self) { return frames_view(self, self.cast<const Simulation&>().measured, true); },
+          "labels", [](const Simulation& s) { return s.recording.labels; }, "the model's 50 marker names")
+      .def_readonly("joint_names", &Simulation::joint_names)
+      .def_property_readonly("hidden_fraction", [](const Simulation& s) { return s.recording.hidden_fraction(); })
+      .def_property_readonly(
+          "points",
+          [](py::object self) { return frames_view(self, self.cast<const Simulation&>().recording.positions, true); },
           "(F, M, 3) measured markers in mm, NaN where hidden")
       .def_property_readonly(
           "clean", [](py::object self) { return frames_view(self, self.cast<const Simulation&>().clean, true); },
@@ -161,13 +154,13 @@ void bind_simulate(py::module_& module) {
       .def_property_readonly(
           "visible",
           [](py::object self) {
-            const auto& v = self.cast<const Simulation&>().visible;
+            const auto& v = self.cast<const Simulation&>().recording.visible;
             return py::array_t<bool>({v.cols(), v.rows()}, v.data(), self);
           },
           "(F, M) bool")
       .def("__iter__", [](py::object self) {
         const Simulation& s = self.cast<const Simulation&>();
-        return py::iter(py::make_tuple(s.labels, s.rate, self.attr("points")));
+        return py::iter(py::make_tuple(s.recording.labels, s.recording.rate_hz, self.attr("points")));
       });
 
   module.def("simulate", &simulate, py::arg("motion"), py::arg("seed") = 1,

@@ -5,8 +5,10 @@
 /// conversion of one (P, 3) array and the estimate's few small arrays (measured in docs/python.md).
 #include "bindings.hpp"
 #include "numpy_bridge.hpp"
+#include "streaming_tracker.hpp"
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/core/sample_cache.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
@@ -19,50 +21,6 @@
 
 namespace s2kf::python {
 namespace {
-
-/// A tracker and the frame buffers it is fed from (sized once: no allocation per frame).
-class StreamingTracker {
- public:
-  StreamingTracker(const std::vector<std::string>& labels, double rate, const body::BodyModel& model,
-                   track::TrackerOptions options) {
-    if (!(rate > 0) || !std::isfinite(rate))
-      throw py::value_error("the frame rate must be a positive number of Hz, got " + std::to_string(rate));
-    model.validate();
-    const track::MarkerMapping mapping = track::map_markers(labels, model.marker_names());
-    if (mapping.markers_used() == 0)
-      throw py::value_error("none of the " + std::to_string(labels.size()) +
-                            " labels is a marker of the body model (expected names such as LASI, RKNE, C7)");
-    py::gil_scoped_release unlocked;  // the sample set may be computed (seconds) on first use
-    tracker_ = std::make_unique<track::Tracker>(model, mapping, std::move(options), rate);
-    points_.resize(3, static_cast<Eigen::Index>(labels.size()));
-    visible_.resize(static_cast<Eigen::Index>(labels.size()));
-  }
-
-  track::FrameEstimate process(const py::handle& frame_value, const py::handle& visible_value) {
-    const Eigen::Index count = points_.cols();
-    const DoubleArray frame = as_double_array(frame_value, "frame");
-    require_shape(frame, {count, 3}, "frame", "(P, 3) with P = " + std::to_string(count) + " labels");
-    // C-ordered (P, 3) is the tracker's column-major 3 x P.
-    std::copy(frame.data(), frame.data() + 3 * count, points_.data());
-    if (visible_value.is_none()) {
-      visible_.setConstant(true);  // the tracker treats NaN coordinates as hidden
-    } else {
-      const auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(visible_value);
-      if (!mask || mask.ndim() != 1 || mask.shape(0) != count)
-        throw py::value_error("visible must be one bool per point (" + std::to_string(count) + ")");
-      std::copy(mask.data(), mask.data() + count, visible_.data());
-    }
-    py::gil_scoped_release unlocked;
-    return tracker_->process(points_, visible_);
-  }
-
-  const track::Tracker& tracker() const { return *tracker_; }
-
- private:
-  std::unique_ptr<track::Tracker> tracker_;
-  Eigen::Matrix3Xd points_;
-  Eigen::Array<bool, Eigen::Dynamic, 1> visible_;
-};
 
 track::TrackerOptions tracker_options(const std::string& preset, double rate, int samples, double marker_noise_mm,
                                       double gate_probability) {
@@ -79,13 +37,6 @@ track::TrackerOptions tracker_options(const std::string& preset, double rate, in
   return options;
 }
 
-py::array_t<double> pose_row(const body::Pose& pose) {
-  py::array_t<double> out(6 + pose.joints.size());
-  double* row = out.mutable_data();
-  for (int k = 0; k < 3; ++k) row[k] = pose.root_position(k), row[3 + k] = pose.root_rpy(k);
-  std::copy(pose.joints.data(), pose.joints.data() + pose.joints.size(), row + 6);
-  return out;
-}
 
 }  // namespace
 
@@ -101,7 +52,7 @@ void bind_tracker(py::module_& module) {
       .def_property_readonly(
           "joints", [](const FrameEstimate& e) { return vector_copy(e.pose.joints); }, "(40,) rad")
       .def_property_readonly(
-          "pose", [](const FrameEstimate& e) { return pose_row(e.pose); },
+          "pose", [](const FrameEstimate& e) { return vector_copy(body::pose_row(e.pose)); },
           "(46,) root x, y, z, roll, pitch, yaw, joints: a row of the motion table")
       .def_property_readonly(
           "root_rotation", [](const FrameEstimate& e) { return matrix_copy(e.root_rotation); }, "(3, 3)")
@@ -126,8 +77,8 @@ void bind_tracker(py::module_& module) {
                        int samples, const std::string& preset, double marker_noise_mm, double gate_probability) {
              const track::TrackerOptions options =
                  tracker_options(preset, rate, samples, marker_noise_mm, gate_probability);
-             return std::make_unique<StreamingTracker>(labels, rate, model ? *model : body::mmm_body_model(1750),
-                                                       options);
+             return streaming_tracker_for_labels(labels, rate, model ? *model : body::mmm_body_model(1750),
+                                                 options);
            }),
            py::arg("labels"), py::arg("rate"), py::arg("model") = nullptr, py::arg("samples") = 301,
            py::arg("preset") = "default", py::arg("marker_noise_mm") = 0.0, py::arg("gate_probability") = 0.0,
