@@ -137,15 +137,14 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   } catch (const std::invalid_argument& e) {
     throw cli::UserError(input + ": " + e.what());
   }
-  // Model outputs never match a marker; the summary lists them under their names in the file.
-  std::size_t ignored_output = 0;
+  // Model outputs never match a marker; the summary lists each under its own name in the file.
+  // The ignored labels are in point order, one per unmatched point, "" for every model output.
+  std::vector<std::string> output_names;
   for (std::size_t p = 0; p < raw_labels.size(); ++p)
-    if (source.labels()[p].empty()) {
-      auto& ignored = session.mapping.ignored_labels;
-      const auto blank = std::find(ignored.begin() + static_cast<std::ptrdiff_t>(ignored_output), ignored.end(),
-                                   std::string());
-      if (blank != ignored.end()) *blank = raw_labels[p], ignored_output = static_cast<std::size_t>(blank - ignored.begin()) + 1;
-    }
+    if (source.labels()[p].empty()) output_names.push_back(raw_labels[p]);
+  std::size_t next_output = 0;
+  for (std::string& label : session.mapping.ignored_labels)
+    if (label.empty() && next_output < output_names.size()) label = output_names[next_output++];
   std::vector<std::string> warnings = file_warnings;
   warnings.insert(warnings.end(), session.warnings.begin(), session.warnings.end());
   result->messages = cli::marker_set_messages(choice, session.mapping);
