@@ -7,10 +7,14 @@
 #include "numpy_bridge.hpp"
 #include "streaming_tracker.hpp"
 
+#include "marker_set_json.hpp"  // examples/s2kf: bundled marker sets and marker-set files
+
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
+#include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/track/session.hpp>
 #include <s2kf/track/tracker_options.hpp>
 
 #include <pybind11/stl.h>
@@ -21,6 +25,34 @@
 
 namespace s2kf::python {
 namespace {
+
+/// A tracker whose model carries a marker set (bundled name or file), as the pipeline builds it
+/// (track::prepare_session): the set applied to the model at its reference height, scaled to the
+/// subject, labels mapped by the set's labels and aliases, the set's per-marker noise.
+std::unique_ptr<StreamingTracker> streaming_tracker_for_marker_set(const std::vector<std::string>& labels,
+                                                                   double rate, const std::string& markerset,
+                                                                   double height_mm, track::TrackerOptions options) {
+  if (!track::plausible_height_mm(height_mm))
+    throw py::value_error("height_mm must lie between 300 and 3000, got " + number_text(height_mm));
+  body::MarkerSet set;
+  try {
+    set = cli::resolve_marker_set(markerset);
+  } catch (const cli::UserError& e) {
+    throw py::value_error(e.what());
+  }
+  const body::BodyModel model = body::apply_marker_set(body::mmm_body_model(set.reference_height_mm), set);
+  const track::MarkerMapping mapping = track::map_marker_set(labels, set);
+  if (mapping.markers_used() == 0)
+    throw py::value_error("none of the " + std::to_string(labels.size()) + " labels is a marker of the marker set " +
+                          set.name);
+  if (!(rate > 0) || !std::isfinite(rate))
+    throw py::value_error("the frame rate must be a positive number of Hz, got " + number_text(rate));
+  options.marker_noise_mm_per_marker = track::marker_noise_of(set);
+  py::gil_scoped_release unlocked;
+  const SampleSet samples = lcd_sample_set(model.joint_count() + 6, options.samples).set;
+  return std::make_unique<StreamingTracker>(model.scaled(height_mm), mapping, std::move(options), rate, samples,
+                                            static_cast<Eigen::Index>(labels.size()));
+}
 
 track::TrackerOptions tracker_options(const std::string& preset, double rate, int samples, double marker_noise_mm,
                                       double gate_probability) {
@@ -74,16 +106,22 @@ void bind_tracker(py::module_& module) {
                                "The whole-body S2KF tracker, one frame at a time. `labels` name the points of "
                                "each frame, matched to the model's markers by name (KIT names).")
       .def(py::init([](const std::vector<std::string>& labels, double rate, const body::BodyModel* model,
-                       int samples, const std::string& preset, double marker_noise_mm, double gate_probability) {
-             const track::TrackerOptions options =
-                 tracker_options(preset, rate, samples, marker_noise_mm, gate_probability);
-             return streaming_tracker_for_labels(labels, rate, model ? *model : body::mmm_body_model(1750),
-                                                 options);
+                       const py::object& markerset, double height_mm, int samples, const std::string& preset,
+                       double marker_noise_mm, double gate_probability) {
+             track::TrackerOptions options = tracker_options(preset, rate, samples, marker_noise_mm, gate_probability);
+             if (markerset.is_none())
+               return streaming_tracker_for_labels(labels, rate, model ? *model : body::mmm_body_model(height_mm),
+                                                   options);
+             if (model) throw py::value_error("give a model or a marker set, not both");
+             return streaming_tracker_for_marker_set(labels, rate, py::str(markerset), height_mm, options);
            }),
-           py::arg("labels"), py::arg("rate"), py::arg("model") = nullptr, py::arg("samples") = 301,
-           py::arg("preset") = "default", py::arg("marker_noise_mm") = 0.0, py::arg("gate_probability") = 0.0,
-           "labels: one per point; rate: Hz; model: a BodyModel (default: 1750 mm); samples: S2KF sample "
-           "count; preset: 'default' or 'paper'; marker_noise_mm: 0 keeps the preset's")
+           py::arg("labels"), py::arg("rate"), py::arg("model") = nullptr, py::arg("markerset") = py::none(),
+           py::arg("height_mm") = 1750.0, py::arg("samples") = 301, py::arg("preset") = "default",
+           py::arg("marker_noise_mm") = 0.0, py::arg("gate_probability") = 0.0,
+           "labels: one per point; rate: Hz; model: a BodyModel whose marker names the labels are (default: "
+           "the KIT model at height_mm); markerset: 'kit', 'cmu', 'plugin_gait' or a .json file instead, on a "
+           "subject of height_mm; samples: S2KF sample count; preset: 'default' or 'paper'; marker_noise_mm: "
+           "0 keeps the preset's")
       .def("process", &StreamingTracker::process, py::arg("frame"), py::arg("visible") = py::none(),
            "One frame: (P, 3) mm in label order (NaN: hidden), optional (P,) visibility. Returns a "
            "FrameEstimate. Runs without the GIL.")

@@ -99,3 +99,19 @@ def test_long_cpp_calls_release_the_gil():
     worker.join()
     # Holding the GIL would stall this loop for the whole call (alone seconds) in one gap.
     assert alone > 0.2 and max(gaps) < alone / 2, (alone, max(gaps))
+
+
+def test_a_marker_set_tracker_equals_the_pipeline_without_calibration(c3d_dir):
+    """A live CMU-labelled stream: Tracker(markerset='cmu') is the tracker track() runs."""
+    rec = s2kf.read_c3d(str(c3d_dir / "85_02.c3d"))
+    frames = slice(0, 200)
+    result = s2kf.track(rec.points[frames], rec.labels, rec.rate, markerset="cmu", calibrate=False,
+                        height_mm=1800, samples=101)
+    tracker = s2kf.Tracker(rec.labels, rec.rate, markerset="cmu", height_mm=1800, samples=101)
+    assert tracker.ignored_labels == result.summary["labels_ignored"]
+    poses = np.array([tracker.process(f).pose for f in rec.points[frames]])
+    np.testing.assert_array_equal(poses, result.poses)
+    with pytest.raises(ValueError, match="unknown marker set 'cmv'"):
+        s2kf.Tracker(rec.labels, rec.rate, markerset="cmv")
+    with pytest.raises(ValueError, match="give a model or a marker set, not both"):
+        s2kf.Tracker(rec.labels, rec.rate, markerset="cmu", model=s2kf.BodyModel())
