@@ -13,7 +13,7 @@ endfunction()
 set(prefix ${WORK_DIR}/prefix)
 run_step(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/s2kf-build -G ${CMAKE_GENERATOR}
          -DS2KF_BUILD_TESTS=OFF -DS2KF_BUILD_BENCHMARKS=OFF -DS2KF_BUILD_EXAMPLES=OFF
-         -DS2KF_INSTALL=ON -DCMAKE_INSTALL_PREFIX=${prefix})
+         -DS2KF_BUILD_PYTHON=OFF -DS2KF_INSTALL=ON -DCMAKE_INSTALL_PREFIX=${prefix})
 run_step(${CMAKE_COMMAND} --build ${WORK_DIR}/s2kf-build --target install)
 
 run_step(${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer/find_package_project -B ${WORK_DIR}/fp-build

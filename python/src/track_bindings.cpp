@@ -1,0 +1,427 @@
+/// @file
+/// s2kf.track: a whole recording through the library's pipeline (track/session.hpp: marker-set
+/// choice, height, subject calibration, tracker, optional smoothing) exactly as `s2kf track` runs it,
+/// with the same summary; and s2kf.TrackResult, the motion as numpy views with the program's
+/// writers (.csv, .mot, .bvh, .json, _markers.csv).
+#include "bindings.hpp"
+#include "numpy_bridge.hpp"
+#include "streaming_tracker.hpp"
+
+#include "marker_set_json.hpp"  // examples/s2kf: bundled marker sets, the automatic choice, messages
+
+#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/atomic_file.hpp>
+#include <s2kf/io/bvh.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/io/motion_files.hpp>
+#include <s2kf/track/session.hpp>
+#include <s2kf/track/tracking_metrics.hpp>
+
+#include <nlohmann/json.hpp>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace s2kf::python {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Memory --smooth may take before it refuses a recording (as `s2kf track`).
+constexpr double kSmoothingMemoryLimitBytes = 8e9;
+
+/// Frames read in place from a C-ordered (F, P, 3) float64 array: no copy of the recording. A
+/// point is visible where its coordinates are finite.
+class ArrayFrameSource : public FrameSource {
+ public:
+  ArrayFrameSource(const double* data, std::int64_t frames, std::vector<std::string> labels, double rate)
+      : data_(data), frames_(frames), labels_(std::move(labels)), rate_(rate) {}
+  const std::vector<std::string>& labels() const override { return labels_; }
+  double rate_hz() const override { return rate_; }
+  std::int64_t frame_count() const override { return frames_; }
+  bool read(std::int64_t index, MarkerFrame& frame) override {
+    if (index < 0 || index >= frames_) return false;
+    const auto points = static_cast<Eigen::Index>(labels_.size());
+    frame.index = index;
+    frame.positions = Eigen::Map<const Eigen::Matrix3Xd>(data_ + index * 3 * points, 3, points);
+    frame.visible.resize(points);
+    for (Eigen::Index p = 0; p < points; ++p) {
+      frame.visible(p) = frame.positions.col(p).allFinite();
+      if (!frame.visible(p)) frame.positions.col(p).setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
+    return true;
+  }
+
+ private:
+  const double* data_;
+  std::int64_t frames_;
+  std::vector<std::string> labels_;
+  double rate_;
+};
+
+struct TrackSettings {
+  std::string markerset, subject;
+  bool calibrate = true;
+  std::int64_t calibration_frames = 1200;
+  bool smooth = false;
+  int samples = 301;
+  double height_mm = 0;
+  std::string preset = "default";
+  std::string method = "s2kf";
+};
+
+/// A tracked recording: the session it was tracked with, the run, and the program's summary.
+struct TrackResult {
+  std::string name;  // the .mot file's first line: the recording's file stem
+  track::Session session;
+  track::TrackingRun run;
+  SampleSet samples;
+  std::vector<std::string> messages;
+  nlohmann::json summary;
+  Eigen::Index point_count = 0;
+};
+
+/// The program's error sentences as Python exceptions: a missing file is FileNotFoundError.
+[[noreturn]] void raise_user_error(const std::string& message) {
+  const bool missing = message.find("does not exist") != std::string::npos ||
+                       message.find("cannot open") != std::string::npos;
+  PyErr_SetString(missing ? PyExc_FileNotFoundError : PyExc_ValueError, message.c_str());
+  throw py::error_already_set();
+}
+
+nlohmann::json number_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+/// The pipeline of `s2kf track` (examples/s2kf/command_track.cpp, track_file) without its files:
+/// marker-set choice, session, run, summary. `input` names the recording in messages and the
+/// summary; `raw_labels` (empty, or one per point) give model outputs their names in the ignored
+/// list; `file_warnings` are the C3D reader's. Runs without the GIL; errors are std exceptions
+/// or cli::UserError, translated by the caller.
+std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string& input, const std::string& name,
+                                          const std::vector<std::string>& raw_labels,
+                                          const std::vector<std::string>& file_warnings, const TrackSettings& settings) {
+  if (settings.smooth && settings.method != "s2kf")
+    throw cli::UserError("smooth works on the S2KF's estimates; it cannot be combined with method='baseline'");
+  if (source.frame_count() == 0) throw cli::UserError(input + ": the recording holds no complete frame");
+  if (settings.smooth &&
+      static_cast<double>(source.frame_count()) * track::TrackingSmoother::kBytesPerFrame > kSmoothingMemoryLimitBytes)
+    throw cli::UserError(input + ": " + std::to_string(source.frame_count()) +
+                         " frames are too many to smooth in memory; track without smoothing, or split the recording");
+  const cli::MarkerSetChoice choice = cli::choose_marker_set_for(source.labels(), settings.markerset, settings.subject);
+  track::SessionOptions session_options;
+  try {
+    session_options.tracker = track::preset_options(settings.preset, source.rate_hz());
+  } catch (const std::invalid_argument& e) {
+    throw cli::UserError(e.what());
+  }
+  if (settings.samples > 0) session_options.tracker.samples = settings.samples;
+  session_options.height_mm = settings.height_mm;
+  session_options.calibrate = settings.calibrate && settings.subject.empty();
+  session_options.calibration_frames = settings.calibration_frames;
+
+  auto result = std::make_unique<TrackResult>();
+  result->name = name;
+  result->point_count = static_cast<Eigen::Index>(source.labels().size());
+  result->samples = lcd_sample_set(6 + body::kJointCount, session_options.tracker.samples).set;
+  track::Session& session = result->session;
+  try {
+    session = track::prepare_session(source, choice.set, session_options, result->samples);
+  } catch (const std::invalid_argument& e) {
+    throw cli::UserError(input + ": " + e.what());
+  }
+  // Model outputs never match a marker; the summary lists each under its own name in the file.
+  // The ignored labels are in point order, one per unmatched point, "" for every model output.
+  std::vector<std::string> output_names;
+  for (std::size_t p = 0; p < raw_labels.size(); ++p)
+    if (source.labels()[p].empty()) output_names.push_back(raw_labels[p]);
+  std::size_t next_output = 0;
+  for (std::string& label : session.mapping.ignored_labels)
+    if (label.empty() && next_output < output_names.size()) label = output_names[next_output++];
+  std::vector<std::string> warnings = file_warnings;
+  warnings.insert(warnings.end(), session.warnings.begin(), session.warnings.end());
+  result->messages = cli::marker_set_messages(choice, session.mapping);
+
+  track::RunOptions run_options;
+  run_options.method = settings.method == "s2kf" ? track::Method::s2kf : track::Method::baseline;
+  run_options.smooth = settings.smooth;
+  track::TrackingRun& run = result->run;
+  try {
+    run = track::run_session(session, source, result->samples, run_options);
+  } catch (const std::invalid_argument& e) {
+    throw cli::UserError(input + ": " + e.what());
+  }
+  if (run.frames_tracked == 0)
+    throw cli::UserError(input + ": no frame has the " + std::to_string(session.tracker.min_markers_to_start) +
+                         " visible markers needed to start tracking");
+  warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
+
+  // The summary, field for field as `s2kf track` writes PREFIX.json.
+  const long converged = track::converged_frame(run.mean_marker_distance);
+  const double level = track::mean_from(run.mean_marker_distance, converged);
+  const double overall = track::mean_from(run.mean_marker_distance, 0);
+  nlohmann::json calibration_summary = nullptr;
+  if (session.calibration)
+    calibration_summary = {{"frames", session.calibration_frames},
+                           {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
+                           {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
+                           {"segment_scale", session.calibration->segment_scale}};
+  std::vector<double> latency_ms = run.seconds;
+  for (double& s : latency_ms) s *= 1000;
+  std::vector<std::string> markers_used;
+  for (int m = 0; m < session.model.marker_count(); ++m)
+    if (session.mapping.point_of_marker[m] >= 0) markers_used.push_back(session.model.markers[m].name);
+  const bool s2kf_method = run_options.method == track::Method::s2kf;
+  result->summary = {
+      {"input", input},
+      {"method", settings.method},
+      {"marker_set", choice.set.name},
+      {"marker_set_source", choice.source},
+      {"marker_set_messages", result->messages},
+      {"calibration", calibration_summary},
+      {"smoothed", settings.smooth},
+      {"preset", session.tracker.preset},
+      {"frames", run.frames},
+      {"frames_tracked", run.frames_tracked},
+      {"rate", source.rate_hz()},
+      {"height_mm", session.height_mm},
+      {"height_source", session.height_source},
+      {"markers_used", markers_used},
+      {"labels_ignored", session.mapping.ignored_labels},
+      {"mean_marker_distance_mm", number_or_null(level)},
+      {"converged_frame", converged},
+      {"mean_marker_distance_all_frames_mm", number_or_null(overall)},
+      {"latency_ms", {{"median", track::quantile(latency_ms, 0.5)}, {"p99", track::quantile(latency_ms, 0.99)}}},
+      {"samples", s2kf_method ? nlohmann::json(session.tracker.samples) : nlohmann::json(nullptr)},
+      {"warnings", warnings},
+  };
+  return result;
+}
+
+/// The CLI's checks on the settings (its option ranges), as ValueError.
+void check_settings(const TrackSettings& settings) {
+  if (settings.samples < 3 || settings.samples > 100001)
+    throw py::value_error("samples must lie between 3 and 100001, got " + std::to_string(settings.samples));
+  if (settings.height_mm != 0 && !(settings.height_mm >= 300 && settings.height_mm <= 3000))
+    throw py::value_error("height_mm must lie between 300 and 3000 (or be 0: estimated), got " +
+                          number_text(settings.height_mm));
+  if (settings.method != "s2kf" && settings.method != "baseline")
+    throw py::value_error("method must be 's2kf' or 'baseline', not '" + settings.method + "'");
+  if (settings.calibration_frames < 10) throw py::value_error("calibration_frames must be at least 10");
+}
+
+std::unique_ptr<TrackResult> track(const py::object& recording, const py::object& labels_value,
+                                   const py::object& rate_value, const TrackSettings& settings,
+                                   const py::object& model_output_value, const py::object& name_value) {
+  check_settings(settings);
+  try {
+    // A C3D file: read as the program reads it, frame by frame.
+    if (py::isinstance<py::str>(recording) || py::hasattr(recording, "__fspath__")) {
+      if (!labels_value.is_none() || !rate_value.is_none())
+        throw py::value_error("labels and rate come from the C3D file; give them only with an array of points");
+      const std::string path = py::str(py::module_::import("os").attr("fspath")(recording));
+      if (!fs::exists(path)) raise_user_error(path + ": no such file (it does not exist)");
+      py::gil_scoped_release unlocked;
+      c3d::C3dFrameSource source(path);
+      std::vector<std::string> raw;
+      for (const c3d::PointLabel& label : source.info().labels) raw.push_back(label.raw);
+      return run_pipeline(source, path, fs::path(path).stem().string(), raw, source.info().warnings, settings);
+    }
+    // Points with labels and a rate, given or taken from a read_c3d / simulate result.
+    py::object points_value = recording, model_output = model_output_value;
+    py::object labels_object = labels_value, rate_object = rate_value;
+    std::vector<std::string> file_warnings;
+    if (py::hasattr(recording, "points") && py::hasattr(recording, "labels") && py::hasattr(recording, "rate")) {
+      points_value = recording.attr("points");
+      if (labels_object.is_none()) labels_object = recording.attr("labels");
+      if (rate_object.is_none()) rate_object = recording.attr("rate");
+      if (model_output.is_none() && py::hasattr(recording, "model_output")) model_output = recording.attr("model_output");
+      if (py::hasattr(recording, "warnings")) file_warnings = recording.attr("warnings").cast<std::vector<std::string>>();
+    }
+    if (labels_object.is_none() || rate_object.is_none())
+      throw py::value_error("track(points, labels, rate): labels and rate are needed with an array of points");
+    const auto labels = labels_object.cast<std::vector<std::string>>();
+    const double rate = rate_object.cast<double>();
+    if (!(rate > 0) || !std::isfinite(rate))
+      throw py::value_error("the frame rate must be a positive number of Hz, got " + number_text(rate));
+    const DoubleArray points = as_double_array(points_value, "points");
+    const auto point_count = static_cast<py::ssize_t>(labels.size());
+    require_shape(points, {-1, point_count, 3}, "points",
+                  "(F, P, 3) with P = " + std::to_string(point_count) + " labels");
+    // Model outputs (angles, forces stored as points) match nothing: an empty label, as the program.
+    std::vector<std::string> matched = labels;
+    if (!model_output.is_none()) {
+      const auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(model_output);
+      if (!mask || mask.ndim() != 1 || mask.shape(0) != point_count)
+        throw py::value_error("model_output must be one bool per point (" + std::to_string(point_count) + ")");
+      for (py::ssize_t p = 0; p < point_count; ++p)
+        if (mask.at(p)) matched[static_cast<std::size_t>(p)].clear();
+    }
+    const std::string name = name_value.is_none() ? std::string("recording") : name_value.cast<std::string>();
+    py::gil_scoped_release unlocked;
+    ArrayFrameSource source(points.data(), points.shape(0), matched, rate);
+    return run_pipeline(source, name, name, labels, file_warnings, settings);
+  } catch (const cli::UserError& e) {
+    raise_user_error(e.what());
+  }
+}
+
+/// A view of column `first`..`first + count` of the run's motion table (frames x columns,
+/// column-major), as a (F, count) array, or (F,) for one column; no copy.
+py::array motion_columns_view(py::object self, Eigen::Index first, Eigen::Index count, bool flatten) {
+  const Eigen::MatrixXd& values = self.cast<const TrackResult&>().run.motion.values;
+  const auto step = static_cast<py::ssize_t>(sizeof(double));
+  const double* data = values.data() + first * values.rows();
+  if (flatten) return py::array_t<double>({values.rows()}, {step}, data, self);
+  return py::array_t<double>({values.rows(), count}, {step, step * values.rows()}, data, self);
+}
+
+void write_marker_report(const TrackResult& r, const std::string& path) {
+  // PREFIX_markers.csv of `s2kf track`, line for line.
+  io::write_file_atomically(path, [&](std::ostream& out) {
+    out << "frame,time,mean_marker_distance_mm,visible_markers\n";
+    for (std::size_t f = 0; f < r.run.motion.frame.size(); ++f) {
+      out << std::setprecision(9) << r.run.motion.frame[f] << "," << r.run.motion.time[f] << ",";
+      if (std::isfinite(r.run.mean_marker_distance[f]))
+        out << r.run.mean_marker_distance[f];
+      else
+        out << "nan";
+      out << "," << r.run.visible_markers[f] << "\n";
+    }
+  });
+}
+
+void write_summary(const TrackResult& r, const std::string& path) {
+  io::write_file_atomically(path, [&](std::ostream& out) { out << r.summary.dump(2) << "\n"; });
+}
+
+}  // namespace
+
+void bind_track(py::module_& module) {
+  py::class_<TrackResult>(module, "TrackResult",
+                          "A tracked recording: the motion (arrays are views, one row per frame), the model it "
+                          "was tracked with, the program's summary, and writers for its output files.")
+      .def_property_readonly(
+          "frame",
+          [](const TrackResult& r) {
+            py::array_t<long> out(static_cast<py::ssize_t>(r.run.motion.frame.size()));
+            std::copy(r.run.motion.frame.begin(), r.run.motion.frame.end(), out.mutable_data());
+            return out;
+          },
+          "(F,) frame numbers")
+      .def_property_readonly("time", [](const TrackResult& r) { return vector_copy(Eigen::Map<const Eigen::VectorXd>(r.run.motion.time.data(), static_cast<Eigen::Index>(r.run.motion.time.size()))); }, "(F,) s")
+      .def_property_readonly(
+          "poses", [](py::object self) { return motion_columns_view(self, 0, 6 + body::kJointCount, false); },
+          "(F, 46) root x, y, z (mm), roll, pitch, yaw (rad), joints (rad); NaN rows before tracking starts")
+      .def_property_readonly(
+          "root_position", [](py::object self) { return motion_columns_view(self, 0, 3, false); }, "(F, 3) mm")
+      .def_property_readonly(
+          "root_rpy", [](py::object self) { return motion_columns_view(self, 3, 3, false); }, "(F, 3) rad")
+      .def_property_readonly(
+          "joints", [](py::object self) { return motion_columns_view(self, 6, body::kJointCount, false); },
+          "(F, 40) rad, in joint_names order")
+      .def_property_readonly("joint_names", [](const TrackResult& r) { return r.run.motion.joint_names; })
+      .def_property_readonly(
+          "marker_distance",
+          [](const TrackResult& r) {
+            return vector_copy(Eigen::Map<const Eigen::VectorXd>(r.run.mean_marker_distance.data(),
+                                                                 static_cast<Eigen::Index>(r.run.mean_marker_distance.size())));
+          },
+          "(F,) mean distance (mm) between the observed markers and the model's, NaN where none")
+      .def_property_readonly(
+          "visible_markers",
+          [](const TrackResult& r) {
+            py::array_t<int> out(static_cast<py::ssize_t>(r.run.visible_markers.size()));
+            std::copy(r.run.visible_markers.begin(), r.run.visible_markers.end(), out.mutable_data());
+            return out;
+          },
+          "(F,) mapped markers observed per frame")
+      .def_property_readonly(
+          "seconds",
+          [](const TrackResult& r) {
+            return vector_copy(Eigen::Map<const Eigen::VectorXd>(r.run.seconds.data(), static_cast<Eigen::Index>(r.run.seconds.size())));
+          },
+          "(F,) time the tracker spent per frame")
+      .def_property_readonly(
+          "summary", [](const TrackResult& r) { return py::module_::import("json").attr("loads")(r.summary.dump()); },
+          "the dict `s2kf track` writes as PREFIX.json")
+      .def_property_readonly("messages", [](const TrackResult& r) { return r.messages; },
+                             "what the program prints about the marker set")
+      .def_property_readonly("model", [](const TrackResult& r) { return r.session.model; },
+                             "the body model tracked with: the marker set applied, scaled, calibrated")
+      .def_property_readonly("height_mm", [](const TrackResult& r) { return r.session.height_mm; })
+      .def("to_csv", [](const TrackResult& r, const std::string& path) { io::save_motion_csv(path, r.run.motion); },
+           py::arg("path"), "frame,time,root_x,...,RAy (mm, rad), as `s2kf track` writes PREFIX.csv")
+      .def("to_mot",
+           [](const TrackResult& r, const std::string& path) { io::save_opensim_mot(path, r.run.motion, r.name); },
+           py::arg("path"), "OpenSim motion file (degrees, metres)")
+      .def("to_bvh",
+           [](const TrackResult& r, const std::string& path) {
+             io::save_bvh(path, r.session.model, r.run.motion, r.session.rate_hz);
+           },
+           py::arg("path"), "BVH for Blender")
+      .def("to_json", &write_summary, py::arg("path"), "the summary as `s2kf track` writes PREFIX.json")
+      .def("to_marker_report", &write_marker_report, py::arg("path"),
+           "frame,time,mean_marker_distance_mm,visible_markers (PREFIX_markers.csv)")
+      .def(
+          "write",
+          [](const TrackResult& r, const std::string& prefix) {
+            io::save_motion_csv(prefix + ".csv", r.run.motion);
+            io::save_opensim_mot(prefix + ".mot", r.run.motion, r.name);
+            io::save_bvh(prefix + ".bvh", r.session.model, r.run.motion, r.session.rate_hz);
+            write_summary(r, prefix + ".json");
+            write_marker_report(r, prefix + "_markers.csv");
+          },
+          py::arg("prefix"), "PREFIX.csv, .mot, .bvh, .json and _markers.csv, as `s2kf track --out PREFIX`")
+      .def(
+          "tracker",
+          [](const TrackResult& r) {
+            return std::make_unique<StreamingTracker>(r.session.model, r.session.mapping, r.session.tracker,
+                                                      r.session.rate_hz, r.samples, r.point_count);
+          },
+          "a fresh streaming Tracker with this result's model, marker mapping and options: feeding it the "
+          "recording's frames reproduces the (unsmoothed) motion")
+      .def("__repr__", [](const TrackResult& r) {
+        return "<s2kf.TrackResult " + r.name + ": " + std::to_string(r.run.frames_tracked) + " of " +
+               std::to_string(r.run.frames) + " frames tracked>";
+      });
+
+  module.def(
+      "track",
+      [](const py::object& recording, const py::object& labels, const py::object& rate, const py::object& markerset,
+         const py::object& subject, bool calibrate, std::int64_t calibration_frames, bool smooth, int samples,
+         double height_mm, const std::string& preset, const std::string& method, const py::object& model_output,
+         const py::object& name) {
+        TrackSettings settings;
+        settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();
+        settings.subject = subject.is_none() ? std::string() : py::str(subject).cast<std::string>();
+        settings.calibrate = calibrate;
+        settings.calibration_frames = calibration_frames;
+        settings.smooth = smooth;
+        settings.samples = samples;
+        settings.height_mm = height_mm;
+        settings.preset = preset;
+        settings.method = method;
+        return track(recording, labels, rate, settings, model_output, name);
+      },
+      py::arg("recording"), py::arg("labels") = py::none(), py::arg("rate") = py::none(), py::kw_only(),
+      py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("calibrate") = true,
+      py::arg("calibration_frames") = 1200, py::arg("smooth") = false, py::arg("samples") = 301,
+      py::arg("height_mm") = 0.0, py::arg("preset") = "default", py::arg("method") = "s2kf",
+      py::arg("model_output") = py::none(), py::arg("name") = py::none(),
+      "Tracks a whole recording as `s2kf track` does: track('walk.c3d'), track(s2kf.read_c3d(...)), or "
+      "track(points, labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
+      "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "
+      "calibrate: fit the subject's offsets and bone lengths on the first calibration_frames frames; smooth: "
+      "RTS smoothing; height_mm: 0 estimates it; model_output: (P,) bool, points that are not markers. "
+      "Runs without the GIL. Returns a TrackResult.");
+}
+
+}  // namespace s2kf::python

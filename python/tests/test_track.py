@@ -1,0 +1,122 @@
+"""s2kf.track against the command-line program: the same files byte for byte and the same summary
+(but for the timing) on the bundled recordings; the streaming Tracker of a result reproduces its
+motion exactly; bad inputs are Python errors with the program's sentences."""
+import json
+
+import numpy as np
+import pytest
+
+import s2kf
+
+OUTPUTS = (".csv", ".mot", ".bvh", "_markers.csv")
+
+
+def same_as_program(cli, tmp_path, result, program_arguments, known_differences=()):
+    """The files `s2kf track` writes and the module writes for the same recording are the same;
+    `known_differences` names summary keys compared by the caller instead (returned)."""
+    cli("track", *program_arguments, "--out", tmp_path / "cli", "--quiet")
+    result.write(str(tmp_path / "py"))
+    for suffix in OUTPUTS:
+        ours, theirs = (tmp_path / f"py{suffix}").read_bytes(), (tmp_path / f"cli{suffix}").read_bytes()
+        assert ours == theirs, f"{suffix} differs from the program's"
+    ours, theirs = (json.loads((tmp_path / f"{who}.json").read_text()) for who in ("py", "cli"))
+    assert ours == result.summary
+    for summary in (ours, theirs):
+        assert summary.pop("latency_ms").keys() == {"median", "p99"}  # timings differ run to run
+    set_aside = {key: (ours.pop(key), theirs.pop(key)) for key in known_differences}
+    assert ours == theirs
+    return set_aside
+
+
+def test_handstand_as_the_program_tracks_it(cli, tmp_path, data_dir):
+    path = str(data_dir / "handstand.c3d")
+    result = s2kf.track(path)
+    same_as_program(cli, tmp_path, result, [path])
+    summary = result.summary
+    assert summary["marker_set"] == "kit" and summary["calibration"] is not None
+    assert summary["frames_tracked"] == 675 and result.poses.shape == (675, 46)
+    assert np.isfinite(result.joints).all()
+    np.testing.assert_array_equal(result.poses[:, :3], result.root_position)
+    np.testing.assert_array_equal(result.poses[:, 6:], result.joints)
+    # The mean marker distance is that of the model's markers at the tracked poses.
+    rec = s2kf.read_c3d(path)
+    predicted = result.model.marker_positions(result.poses)
+    distance = np.linalg.norm(rec.points - predicted, axis=2).mean(axis=1)
+    np.testing.assert_allclose(result.marker_distance, distance, rtol=1e-9)
+
+
+def test_points_in_memory_give_the_files_of_the_program(cli, tmp_path, data_dir):
+    """Arrays, not a file: the same motion (only the summary's input name differs)."""
+    labels, rate, points = s2kf.read_c3d(str(data_dir / "walk.c3d"))
+    result = s2kf.track(points.copy(), labels, rate, calibrate=False, smooth=True, name="walk")
+    cli("track", data_dir / "walk.c3d", "--no-calibrate", "--smooth", "--out", tmp_path / "cli", "--quiet")
+    result.to_csv(str(tmp_path / "py.csv"))
+    result.to_mot(str(tmp_path / "py.mot"))
+    assert (tmp_path / "py.csv").read_bytes() == (tmp_path / "cli.csv").read_bytes()
+    assert (tmp_path / "py.mot").read_bytes() == (tmp_path / "cli.mot").read_bytes()
+    assert result.summary["smoothed"] and result.summary["calibration"] is None
+
+
+def test_plug_in_gait_with_model_outputs_as_the_program(cli, tmp_path, c3d_dir):
+    path = str(c3d_dir / "PiG_Motion-FlatFoot-One.c3d")
+    result = s2kf.track(path, samples=101)
+    aside = same_as_program(cli, tmp_path, result, [path, "--samples", 101],
+                            known_differences=("labels_ignored", "marker_set_messages"))
+    assert result.summary["marker_set"] == "plugin_gait"
+    rec = s2kf.read_c3d(path)
+    assert rec.model_output.sum() == 80
+    # Each model output is listed under its own name, in file order. The program names them all
+    # after the first one (std::replace of every empty label in command_track.cpp); the rest agrees.
+    ours, theirs = aside["labels_ignored"]
+    outputs = [label for label, output in zip(rec.raw_labels, rec.model_output) if output]
+    assert len(set(outputs)) == 80 and [label for label in ours if label in outputs] == outputs
+    assert len(ours) == len(theirs)
+    assert [a for a, b in zip(ours, theirs) if a != b] == outputs[1:]
+    assert aside["marker_set_messages"][0][0] == aside["marker_set_messages"][1][0]
+    # The same from read_c3d's arrays: model outputs are flagged and never matched.
+    again = s2kf.track(rec, samples=101)
+    np.testing.assert_array_equal(again.poses, result.poses)
+    assert again.summary["labels_ignored"] == result.summary["labels_ignored"]
+
+
+def test_streaming_the_frames_reproduces_the_motion(data_dir):
+    rec = s2kf.read_c3d(str(data_dir / "handstand_occluded.c3d"))
+    result = s2kf.track(rec, samples=101)
+    tracker = result.tracker()
+    poses = np.array([tracker.process(frame, visible).pose for frame, visible in zip(rec.points, rec.visible)])
+    np.testing.assert_array_equal(poses, result.poses)
+
+
+def test_a_known_marker_set_can_be_forced(data_dir):
+    result = s2kf.track(str(data_dir / "handstand.c3d"), markerset="plugin_gait", calibrate=False, samples=101)
+    assert result.summary["marker_set"] == "plugin_gait" and result.summary["marker_set_source"] == "given"
+
+
+def test_bad_recordings_are_python_errors(tmp_path, data_dir):
+    labels, rate, points = s2kf.read_c3d(str(data_dir / "walk.c3d"))
+    with pytest.raises(ValueError, match=r"points must have shape \(F, P, 3\) with P = 50 labels, got \(551, 50\)"):
+        s2kf.track(points[:, :, 0], labels, rate)
+    with pytest.raises(ValueError, match="labels and rate are needed"):
+        s2kf.track(points)
+    with pytest.raises(ValueError, match="^recording: no frame has the 8 visible markers needed to start tracking$"):
+        s2kf.track(np.full_like(points, np.nan), labels, rate, calibrate=False, samples=101)
+    with pytest.raises(ValueError, match="beyond a kilometre: the file's units or scale are wrong"):
+        s2kf.track(points * 1e6, labels, rate, calibrate=False, height_mm=1750, samples=101)
+    with pytest.raises(ValueError, match="none of the recording's labels belongs to a bundled marker set"):
+        s2kf.track(points, [f"X{i}" for i in range(50)], rate)
+    with pytest.raises(ValueError, match=r"unknown marker set 'nope' \(bundled: cmu, kit, plugin_gait"):
+        s2kf.track(points, labels, rate, markerset="nope")
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        s2kf.track(points, labels, rate, markerset=str(tmp_path / "mine.json"))
+    with pytest.raises(ValueError, match="the frame rate must be a positive number of Hz"):
+        s2kf.track(points, labels, -1.0)
+    with pytest.raises(ValueError, match="method must be 's2kf' or 'baseline'"):
+        s2kf.track(points, labels, rate, method="ukf")
+
+
+def test_bad_files_are_os_errors(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        s2kf.track(str(tmp_path / "missing.c3d"))
+    (tmp_path / "text.c3d").write_text("not a recording at all, just words\n" * 20)
+    with pytest.raises(OSError, match="text.c3d: not a C3D file"):
+        s2kf.track(str(tmp_path / "text.c3d"))
