@@ -61,7 +61,8 @@ void run_calibrate(const CalibrateSettings& settings) {
   options.calibration.estimate_segment_scales = !settings.no_scales;
   track::Session session;
   try {
-    session = track::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
+    session =
+        track::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(settings.input + ": " + e.what());
   }
@@ -89,7 +90,8 @@ void run_calibrate(const CalibrateSettings& settings) {
                             " mm before, " + fixed(calibration.mean_marker_distance_after_mm, 1) +
                             " mm after";
   if (fs::path(settings.out).has_parent_path()) fs::create_directories(fs::path(settings.out).parent_path());
-  const auto osim = prepare_subject_opensim_model(settings.out, calibration.model, session.mapping);  // SUBJECT.osim
+  const auto osim =
+      prepare_subject_opensim_model(settings.out, calibration.model, session.mapping);  // SUBJECT.osim
   io::write_file_atomically(settings.out, [&](std::ostream& out) { out << document.dump(2) << "\n"; });
   osim->commit();
   fs::path report = settings.out;
@@ -117,8 +119,8 @@ void run_calibrate(const CalibrateSettings& settings) {
             << height_source << "); mean marker distance "
             << fixed(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
             << fixed(calibration.mean_marker_distance_after_mm, 1) << " mm after " << settings.iterations
-            << " calibration iteration(s).\nWrote " << settings.out << ", " << osim->path().string() << " and "
-            << report_path << ".\n";
+            << " calibration iteration(s).\nWrote " << settings.out << ", " << osim->path().string()
+            << " and " << report_path << ".\n";
 }
 
 const RegisterCommand calibrate_registration{

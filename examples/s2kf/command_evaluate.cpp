@@ -171,7 +171,8 @@ void run_evaluate(const EvaluateSettings& settings) {
     const MarkerSetChoice choice = choose_marker_set_for(complete.labels, "", "");
     track::SessionOptions options;
     options.calibrate = settings.calibrate;
-    setup = track::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
+    setup =
+        track::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(recording_path + ": " + e.what());
   }
@@ -450,8 +451,9 @@ const RegisterCommand evaluate_registration{
       app.add_option("--warmup", settings->warmup,
                      "frames left out of the accuracy against truth (default 20)")
           ->check(CLI::Range(0L, 100000000L));
-      app.add_flag("!--no-calibrate", settings->calibrate,
-                   "evaluate with the marker set as it is (default: calibrate the subject first, as s2kf track does)");
+      app.add_flag(
+          "!--no-calibrate", settings->calibrate,
+          "evaluate with the marker set as it is (default: calibrate the subject first, as s2kf track does)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
       app.callback([settings] { run_evaluate(*settings); });
     }};

@@ -89,8 +89,7 @@ void write_c3d_recording(const fs::path& path, const s2kf::sim::Recording& recor
 void write_clean_csv(const std::string& path, const s2kf::sim::Recording& recording) {
   s2kf::io::write_file_atomically(path, [&](std::ostream& out) {
     out << "frame,time";
-    for (const auto& name : recording.labels)
-      out << "," << name << "_x," << name << "_y," << name << "_z";
+    for (const auto& name : recording.labels) out << "," << name << "_x," << name << "_y," << name << "_z";
     out << "\n";
     char buffer[64];
     for (Eigen::Index k = 0; k < recording.frames(); ++k) {

@@ -53,7 +53,7 @@ struct TrackSettings {
   bool realtime = false;
   bool quiet = false;
   int jobs = 0;
-  bool html = false;  // also write PREFIX.html, the interactive 3D page (s2kf view)
+  bool html = false;       // also write PREFIX.html, the interactive 3D page (s2kf view)
   OutputSettings outputs;  // --formats, --bvh-units, --derivatives (extra_outputs.hpp)
 };
 
@@ -140,7 +140,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     throw UserError(input + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
                     std::to_string(info.frame_count) + " frames (0-based)");
 
-  const MarkerSetChoice choice = choose_marker_set_for(source->labels(), settings.markerset, settings.subject);
+  const MarkerSetChoice choice =
+      choose_marker_set_for(source->labels(), settings.markerset, settings.subject);
   track::SessionOptions session_options;
   try {
     session_options.tracker = track::preset_options(settings.preset, info.rate);
@@ -178,7 +179,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   hooks.on_read = [&](const MarkerFrame& frame) {
     if (frame.index == settings.figure_frame) figure_points = frame;
     if (settings.realtime)
-      std::this_thread::sleep_until(start + std::chrono::duration<double>(static_cast<double>(frame.index) * frame_period));
+      std::this_thread::sleep_until(
+          start + std::chrono::duration<double>(static_cast<double>(frame.index) * frame_period));
   };
   hooks.on_frame = [&](long index) {
     if (settings.realtime) {
@@ -199,16 +201,19 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   // as tracked (memory stays constant however long the recording is), or after the backward pass
   // with --smooth.
   const std::string name = fs::path(input).stem().string();
-  io::MotionStreamWriter motion_files(motion_file_paths(prefix, settings.outputs), session.model, info.rate, name,
-                                      bvh_units(settings.outputs));
-  write_model_outputs(motion_files, settings.outputs, prefix, input, session.model, session.mapping);  // .osim, .trc
+  io::MotionStreamWriter motion_files(motion_file_paths(prefix, settings.outputs), session.model, info.rate,
+                                      name, bvh_units(settings.outputs));
+  write_model_outputs(motion_files, settings.outputs, prefix, input, session.model,
+                      session.mapping);  // .osim, .trc
   io::AtomicFileWriter marker_report(prefix + "_markers.csv");
   write_marker_report_header(marker_report.stream());
   std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
   hooks.sink = [&](const track::TrackedFrame& f) {
     motion_files.append(f.frame, f.time, f.values);
-    write_marker_report_row(marker_report.stream(), f.frame, f.time, f.mean_marker_distance, f.visible_markers);
-    if (f.frame == settings.figure_frame && io::is_tracked_row(f.values)) figure_pose = body::pose_from_row(f.values);
+    write_marker_report_row(marker_report.stream(), f.frame, f.time, f.mean_marker_distance,
+                            f.visible_markers);
+    if (f.frame == settings.figure_frame && io::is_tracked_row(f.values))
+      figure_pose = body::pose_from_row(f.values);
   };
   track::RunOptions run_options;
   run_options.method = settings.method == "s2kf" ? track::Method::s2kf : track::Method::baseline;
@@ -228,7 +233,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (settings.figure_frame >= 0) {
     std::string problem;
     if (!figure_pose)
-      warnings.push_back("frame " + std::to_string(settings.figure_frame) + " was not tracked: no figure drawn");
+      warnings.push_back("frame " + std::to_string(settings.figure_frame) +
+                         " was not tracked: no figure drawn");
     else if (draw_tracked_frame(prefix, settings.figure_frame, session.model, session.mapping, *figure_pose,
                                 figure_points.positions, figure_points.visible, problem))
       figure_file = prefix + "_frame" + std::to_string(settings.figure_frame) + ".png";
@@ -243,10 +249,11 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   const double overall = track::mean_from(run.mean_marker_distance, 0);
   nlohmann::json calibration_summary = nullptr;
   if (session.calibration)
-    calibration_summary = {{"frames", session.calibration_frames},
-                           {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
-                           {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
-                           {"segment_scale", session.calibration->segment_scale}};
+    calibration_summary = {
+        {"frames", session.calibration_frames},
+        {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
+        {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
+        {"segment_scale", session.calibration->segment_scale}};
   std::vector<double>& latency_ms = run.seconds;  // not needed in seconds any more
   for (double& s : latency_ms) s *= 1000;
   const double median_ms = track::quantile(latency_ms, 0.5), p99_ms = track::quantile(latency_ms, 0.99);
@@ -293,7 +300,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
   if (accuracy) summary["truth"] = truth_json(*accuracy);
   io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
-  if (settings.html) viewer::write_result_page(prefix, session.model, session.mapping, settings.truth);  // --html
+  if (settings.html)
+    viewer::write_result_page(prefix, session.model, session.mapping, settings.truth);  // --html
 
   std::ostringstream paragraph;
   for (const std::string& message : messages) paragraph << message << "\n";
@@ -443,7 +451,8 @@ const RegisterCommand track_registration{
           "ground-truth motion CSV (s2kf simulate's _truth.csv): adds the accuracy to the summary");
       app.add_flag("--realtime", settings->realtime,
                    "pace frames at the recording's rate and count deadline misses");
-      app.add_flag("--html", settings->html, "also write PREFIX.html: the motion in 3D in a browser (s2kf view)");
+      app.add_flag("--html", settings->html,
+                   "also write PREFIX.html: the motion in 3D in a browser (s2kf view)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
       add_output_options(app, settings->outputs);
       app.add_option("--jobs", settings->jobs, "recordings tracked at once (default: all cores)")

@@ -54,12 +54,13 @@ std::pair<body::BodyModel, track::MarkerMapping> tracked_model(const std::string
     throw UserError(where + ": its marker set cannot be rebuilt (" + e.what() + ")");
   }
   if (summary["marker_set"] != choice.set.name)
-    throw UserError(where + ": tracked with the marker set " + summary["marker_set"].dump() + ", but " + input +
-                    " now matches " + choice.set.name);
+    throw UserError(where + ": tracked with the marker set " + summary["marker_set"].dump() + ", but " +
+                    input + " now matches " + choice.set.name);
   if (!summary["height_mm"].is_number()) throw UserError(where + ": \"height_mm\" is not a number");
   track::SessionOptions options;
   try {
-    options.tracker = track::preset_options(summary.value("preset", std::string("default")), source->rate_hz());
+    options.tracker =
+        track::preset_options(summary.value("preset", std::string("default")), source->rate_hz());
   } catch (const std::invalid_argument& e) {
     throw UserError(where + ": " + e.what());
   }
@@ -74,7 +75,8 @@ std::pair<body::BodyModel, track::MarkerMapping> tracked_model(const std::string
   }
   track::Session session;
   try {
-    session = track::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
+    session =
+        track::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": " + e.what());
   }

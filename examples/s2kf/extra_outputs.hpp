@@ -77,8 +77,8 @@ inline io::BvhUnits bvh_units(const OutputSettings& settings) {
 inline std::vector<std::string> output_files(const std::string& prefix, const OutputSettings& settings) {
   const io::MotionFilePaths paths = motion_file_paths(prefix, settings);
   std::vector<std::string> files;
-  for (const std::string* path : {&paths.csv, &paths.mot, &paths.bvh, &paths.mmm, &paths.velocity_csv,
-                                  &paths.acceleration_csv})
+  for (const std::string* path :
+       {&paths.csv, &paths.mot, &paths.bvh, &paths.mmm, &paths.velocity_csv, &paths.acceleration_csv})
     if (!path->empty()) files.push_back(*path);
   if (settings.wants("osim")) files.push_back(prefix + ".osim");
   if (settings.wants("trc")) files.push_back(prefix + ".trc");
@@ -103,7 +103,8 @@ inline void check_outputs(const OutputSettings& settings, const std::vector<std:
                       ".*; track them separately with different --out names");
     for (const std::string& file : output_files(prefix, settings))
       if (fs::is_directory(file)) throw UserError("cannot write " + file + ": it is a directory");
-    const fs::path folder = fs::path(prefix).has_parent_path() ? fs::path(prefix).parent_path() : fs::path(".");
+    const fs::path folder =
+        fs::path(prefix).has_parent_path() ? fs::path(prefix).parent_path() : fs::path(".");
     if (fs::exists(folder) && !fs::is_directory(folder))
       throw UserError("cannot write into " + folder.string() + ": it is not a directory");
   }
@@ -111,7 +112,8 @@ inline void check_outputs(const OutputSettings& settings, const std::vector<std:
 
 /// The output prefix of each recording, as `s2kf track` names them: `out` itself for one recording
 /// (default: its name), `out`/NAME for several.
-inline std::vector<std::string> output_prefixes(const std::vector<std::string>& recordings, const std::string& out) {
+inline std::vector<std::string> output_prefixes(const std::vector<std::string>& recordings,
+                                                const std::string& out) {
   namespace fs = std::filesystem;
   std::vector<std::string> prefixes;
   for (const std::string& recording : recordings) {
@@ -125,7 +127,8 @@ inline std::vector<std::string> output_prefixes(const std::vector<std::string>& 
 }
 
 /// The model markers that see a point of the recording (those the .osim and .trc carry).
-inline std::vector<std::string> used_marker_names(const body::BodyModel& model, const track::MarkerMapping& mapping) {
+inline std::vector<std::string> used_marker_names(const body::BodyModel& model,
+                                                  const track::MarkerMapping& mapping) {
   std::vector<std::string> names;
   for (int m = 0; m < model.marker_count(); ++m)
     if (mapping.point_of_marker[static_cast<std::size_t>(m)] >= 0) names.push_back(model.markers[m].name);
@@ -136,17 +139,19 @@ inline std::vector<std::string> used_marker_names(const body::BodyModel& model, 
 /// used markers, read again from `input`) as companions of `motion_files`: they appear with the
 /// motion files when it finishes, and not at all when the run fails.
 inline void write_model_outputs(io::MotionStreamWriter& motion_files, const OutputSettings& settings,
-                                const std::string& prefix, const std::string& input, const body::BodyModel& model,
-                                const track::MarkerMapping& mapping) {
+                                const std::string& prefix, const std::string& input,
+                                const body::BodyModel& model, const track::MarkerMapping& mapping) {
   namespace fs = std::filesystem;
   const std::vector<std::string> markers = used_marker_names(model, mapping);
   const std::string name = fs::path(input).stem().string();
-  if (settings.wants("osim")) io::write_opensim_model(motion_files.companion(prefix + ".osim"), model, name, markers);
+  if (settings.wants("osim"))
+    io::write_opensim_model(motion_files.companion(prefix + ".osim"), model, name, markers);
   if (!settings.wants("trc")) return;
   std::ostream& trc = motion_files.companion(prefix + ".trc");
   c3d::C3dReader reader(input);
   const c3d::C3dInfo& info = reader.info();
-  io::write_trc_header(trc, fs::path(prefix + ".trc").filename().string(), info.rate, info.frame_count, markers);
+  io::write_trc_header(trc, fs::path(prefix + ".trc").filename().string(), info.rate, info.frame_count,
+                       markers);
   std::vector<int> points;
   for (int m = 0; m < model.marker_count(); ++m)
     if (mapping.point_of_marker[static_cast<std::size_t>(m)] >= 0)
@@ -163,9 +168,8 @@ inline void write_model_outputs(io::MotionStreamWriter& motion_files, const Outp
 
 /// The OpenSim model of a calibrated subject (`s2kf calibrate --out SUBJECT.json` writes SUBJECT.osim),
 /// written to its temporary file; the caller commits it with the subject file.
-inline std::unique_ptr<io::AtomicFileWriter> prepare_subject_opensim_model(const std::string& subject_path,
-                                                                          const body::BodyModel& model,
-                                                                          const track::MarkerMapping& mapping) {
+inline std::unique_ptr<io::AtomicFileWriter> prepare_subject_opensim_model(
+    const std::string& subject_path, const body::BodyModel& model, const track::MarkerMapping& mapping) {
   std::filesystem::path path = subject_path;
   path.replace_extension(".osim");
   auto file = std::make_unique<io::AtomicFileWriter>(path);

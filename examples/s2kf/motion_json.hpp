@@ -4,7 +4,6 @@
 #pragma once
 
 #include <s2kf/core/constants.hpp>
-
 #include <s2kf/sim/keyframe_motion.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 

@@ -35,8 +35,8 @@ struct C3dData {
 
 void raise_file_not_found(const std::string& path) {
   // The reader's own sentence, as a FileNotFoundError (an OSError) like open() raises.
-  const std::string message = std::filesystem::path(path).filename().string() +
-                              ": cannot open the file for reading: no such file";
+  const std::string message =
+      std::filesystem::path(path).filename().string() + ": cannot open the file for reading: no such file";
   PyErr_SetString(PyExc_FileNotFoundError, message.c_str());
   throw py::error_already_set();
 }
@@ -113,12 +113,12 @@ void bind_c3d(py::module_& module) {
             return raw;
           },
           "labels as stored in the file")
-      .def_property_readonly(
-          "descriptions", [](const C3dData& d) { return d.recording.info.descriptions; })
+      .def_property_readonly("descriptions", [](const C3dData& d) { return d.recording.info.descriptions; })
       .def_property_readonly(
           "warnings", [](const C3dData& d) { return d.recording.info.warnings; },
           "what the reader had to work around")
-      .def_property_readonly("units", [](const C3dData& d) { return d.recording.info.units; }, "POINT:UNITS as stored")
+      .def_property_readonly(
+          "units", [](const C3dData& d) { return d.recording.info.units; }, "POINT:UNITS as stored")
       .def_property_readonly(
           "to_mm", [](const C3dData& d) { return d.recording.info.to_mm; },
           "the factor that turned the stored coordinates into mm")

@@ -86,8 +86,8 @@ SampleSet sample_set_from_points(const py::handle& points_value, const py::handl
   if (points.shape(0) < 1 || points.shape(1) < 1) throw py::value_error("points must not be empty");
   if (!Eigen::Map<const Eigen::ArrayXd>(points.data(), points.size()).allFinite())
     throw py::value_error("points must be finite");
-  SampleSet set = equally_weighted(Eigen::Map<const Eigen::MatrixXd>(points.data(), points.shape(1), points.shape(0)),
-                                   "user");
+  SampleSet set = equally_weighted(
+      Eigen::Map<const Eigen::MatrixXd>(points.data(), points.shape(1), points.shape(0)), "user");
   if (!weights_value.is_none()) {
     const Eigen::VectorXd weights = vector_argument(weights_value, "weights");
     if (weights.size() != set.count())
@@ -152,7 +152,8 @@ void bind_filter(py::module_& module) {
       py::arg("dimension"), py::arg("count"), py::arg("seed") = 1,
       "seeded i.i.d. normal draws, moment-corrected (count > dimension)");
 
-  py::class_<GaussianXd>(module, "Gaussian", "A Gaussian state N(mean, covariance); the filter updates it in place.")
+  py::class_<GaussianXd>(module, "Gaussian",
+                         "A Gaussian state N(mean, covariance); the filter updates it in place.")
       .def(py::init(&make_gaussian), py::arg("mean"), py::arg("covariance"))
       .def_property(
           "mean",
@@ -189,14 +190,16 @@ void bind_filter(py::module_& module) {
         return "<s2kf.Gaussian in " + std::to_string(g.dimension()) + " dimensions>";
       });
 
-  py::class_<UpdateResult>(module, "UpdateResult", "What an update did; on any status but 'ok' the state is unchanged.")
+  py::class_<UpdateResult>(module, "UpdateResult",
+                           "What an update did; on any status but 'ok' the state is unchanged.")
       .def_property_readonly("status", [](const UpdateResult& r) { return std::string(to_string(r.status)); })
       .def_property_readonly("ok", &UpdateResult::ok)
       .def_readonly("nis", &UpdateResult::nis, "normalised innovation squared")
       .def_readonly("observed", &UpdateResult::observed, "observed measurement components used")
       .def("__bool__", &UpdateResult::ok)
       .def("__repr__", [](const UpdateResult& r) {
-        return std::string("<s2kf.UpdateResult ") + to_string(r.status) + ", nis " + std::to_string(r.nis) + ">";
+        return std::string("<s2kf.UpdateResult ") + to_string(r.status) + ", nis " + std::to_string(r.nis) +
+               ">";
       });
 
   py::class_<Filter>(module, "SmartSamplingKalmanFilter",
@@ -247,7 +250,8 @@ void bind_filter(py::module_& module) {
       .def(
           "update",
           [](py::object self, GaussianXd& state, const py::function& h, const py::handle& y_value,
-             const py::handle& r_value, const py::handle& observed_value, int iterations, double gate_probability) {
+             const py::handle& r_value, const py::handle& observed_value, int iterations,
+             double gate_probability) {
             Filter& filter = self.cast<Filter&>();
             check_state(filter, state);
             check_callable(h, "measurement model");
@@ -256,7 +260,8 @@ void bind_filter(py::module_& module) {
             require_square(r, y.size(), "R");
             ObservedMask observed = ObservedMask::Constant(y.size(), true);
             if (!observed_value.is_none()) {
-              const auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(observed_value);
+              const auto mask =
+                  py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(observed_value);
               if (!mask || mask.ndim() != 1 || mask.shape(0) != y.size())
                 throw py::value_error("observed must be one bool per measurement component (" +
                                       std::to_string(y.size()) + ")");

@@ -46,8 +46,8 @@ inline DoubleArray as_double_array(const py::handle& value, const std::string& w
 
 /// Throws ValueError unless `array` has `ndim` dimensions and, where `shape` is not -1, that size.
 /// `form` spells the expected shape for the message, e.g. "(F, P, 3)".
-inline void require_shape(const py::array& array, const std::vector<py::ssize_t>& shape, const std::string& what,
-                          const std::string& form) {
+inline void require_shape(const py::array& array, const std::vector<py::ssize_t>& shape,
+                          const std::string& what, const std::string& form) {
   bool ok = array.ndim() == static_cast<py::ssize_t>(shape.size());
   for (std::size_t d = 0; ok && d < shape.size(); ++d)
     ok = shape[d] < 0 || array.shape(static_cast<py::ssize_t>(d)) == shape[d];

@@ -65,9 +65,9 @@ void require_range(double value, double low, double high, const std::string& wha
                           ", got " + number_text(value));
 }
 
-Simulation simulate(const std::string& motion_name, std::uint64_t seed, double height_mm, long frames, double rate,
-                    std::optional<std::pair<double, double>> occlusion, double noise_mm, double placement_mm,
-                    double soft_tissue_mm, double segment_scale_sd,
+Simulation simulate(const std::string& motion_name, std::uint64_t seed, double height_mm, long frames,
+                    double rate, std::optional<std::pair<double, double>> occlusion, double noise_mm,
+                    double placement_mm, double soft_tissue_mm, double segment_scale_sd,
                     const std::vector<std::pair<double, double>>& blackouts,
                     const std::vector<std::tuple<std::string, double, double>>& dropouts) {
   // The CLI's ranges, so both accept the same settings.
@@ -83,7 +83,8 @@ Simulation simulate(const std::string& motion_name, std::uint64_t seed, double h
   options.frames = frames;
   if (occlusion) options.occlusion = {occlusion->first, occlusion->second};
   for (const auto& [start, duration] : blackouts) options.blackouts.push_back({start, duration});
-  for (const auto& [segment, start, duration] : dropouts) options.segment_dropouts.push_back({segment, start, duration});
+  for (const auto& [segment, start, duration] : dropouts)
+    options.segment_dropouts.push_back({segment, start, duration});
   sim::SubjectOptions subject_options;
   subject_options.height_mm = height_mm;
   subject_options.noise_sd_mm = noise_mm;
@@ -126,30 +127,37 @@ Simulation simulate(const std::string& motion_name, std::uint64_t seed, double h
 
 /// A view (F, rows / 3, 3) or (F, rows) of a column-major rows x F matrix owned by `self`.
 py::array_t<double> frames_view(py::object self, const Eigen::MatrixXd& matrix, bool points) {
-  if (points) return py::array_t<double>({matrix.cols(), matrix.rows() / 3, Eigen::Index{3}}, matrix.data(), self);
+  if (points)
+    return py::array_t<double>({matrix.cols(), matrix.rows() / 3, Eigen::Index{3}}, matrix.data(), self);
   return py::array_t<double>({matrix.cols(), matrix.rows()}, matrix.data(), self);
 }
 
 }  // namespace
 
 void bind_simulate(py::module_& module) {
-  py::class_<Simulation>(module, "Simulation",
-                         "A synthetic recording with its truth. Unpacks as (labels, rate, points) like read_c3d.")
+  py::class_<Simulation>(
+      module, "Simulation",
+      "A synthetic recording with its truth. Unpacks as (labels, rate, points) like read_c3d.")
       .def_property_readonly("motion_name", [](const Simulation& s) { return s.recording.motion_name; })
       .def_property_readonly("rate", [](const Simulation& s) { return s.recording.rate_hz; })
       .def_property_readonly(
           "labels", [](const Simulation& s) { return s.recording.labels; }, "the model's 50 marker names")
       .def_readonly("joint_names", &Simulation::joint_names)
-      .def_property_readonly("hidden_fraction", [](const Simulation& s) { return s.recording.hidden_fraction(); })
+      .def_property_readonly("hidden_fraction",
+                             [](const Simulation& s) { return s.recording.hidden_fraction(); })
       .def_property_readonly(
           "points",
-          [](py::object self) { return frames_view(self, self.cast<const Simulation&>().recording.positions, true); },
+          [](py::object self) {
+            return frames_view(self, self.cast<const Simulation&>().recording.positions, true);
+          },
           "(F, M, 3) measured markers in mm, NaN where hidden")
       .def_property_readonly(
-          "clean", [](py::object self) { return frames_view(self, self.cast<const Simulation&>().clean, true); },
+          "clean",
+          [](py::object self) { return frames_view(self, self.cast<const Simulation&>().clean, true); },
           "(F, M, 3) markers with placement and soft tissue, before noise and occlusion")
       .def_property_readonly(
-          "truth", [](py::object self) { return frames_view(self, self.cast<const Simulation&>().truth, false); },
+          "truth",
+          [](py::object self) { return frames_view(self, self.cast<const Simulation&>().truth, false); },
           "(F, 46) the true pose per frame: root x, y, z (mm), roll, pitch, yaw, joints (rad)")
       .def_property_readonly(
           "visible",
@@ -164,8 +172,9 @@ void bind_simulate(py::module_& module) {
       });
 
   module.def("simulate", &simulate, py::arg("motion"), py::arg("seed") = 1,
-             py::arg("height_mm") = sim::SubjectOptions{}.height_mm, py::arg("frames") = 0, py::arg("rate") = 100.0,
-             py::arg("occlusion") = py::none(), py::arg("noise_mm") = sim::SubjectOptions{}.noise_sd_mm,
+             py::arg("height_mm") = sim::SubjectOptions{}.height_mm, py::arg("frames") = 0,
+             py::arg("rate") = 100.0, py::arg("occlusion") = py::none(),
+             py::arg("noise_mm") = sim::SubjectOptions{}.noise_sd_mm,
              py::arg("placement_mm") = sim::SubjectOptions{}.placement_sd_mm,
              py::arg("soft_tissue_mm") = sim::SubjectOptions{}.soft_tissue_mm,
              py::arg("segment_scale_sd") = sim::SubjectOptions{}.segment_scale_sd,

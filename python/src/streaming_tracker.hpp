@@ -24,8 +24,8 @@ class StreamingTracker {
  public:
   StreamingTracker(body::BodyModel model, track::MarkerMapping mapping, track::TrackerOptions options,
                    double rate, const SampleSet& samples, Eigen::Index point_count) {
-    tracker_ = std::make_unique<track::Tracker>(std::move(model), std::move(mapping), std::move(options), rate,
-                                                samples);
+    tracker_ = std::make_unique<track::Tracker>(std::move(model), std::move(mapping), std::move(options),
+                                                rate, samples);
     points_.resize(3, point_count);
     visible_.resize(point_count);
   }
@@ -59,7 +59,8 @@ class StreamingTracker {
 
 /// A tracker for points named `labels`, matched to the model's marker names (KIT names).
 inline std::unique_ptr<StreamingTracker> streaming_tracker_for_labels(const std::vector<std::string>& labels,
-                                                                      double rate, const body::BodyModel& model,
+                                                                      double rate,
+                                                                      const body::BodyModel& model,
                                                                       const track::TrackerOptions& options) {
   if (!(rate > 0) || !std::isfinite(rate))
     throw py::value_error("the frame rate must be a positive number of Hz, got " + std::to_string(rate));

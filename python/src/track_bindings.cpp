@@ -18,8 +18,8 @@
 #include <s2kf/track/session.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 
-#include <nlohmann/json.hpp>
 #include <pybind11/stl.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -90,8 +90,8 @@ struct TrackResult {
 
 /// The program's error sentences as Python exceptions: a missing file is FileNotFoundError.
 [[noreturn]] void raise_user_error(const std::string& message) {
-  const bool missing = message.find("does not exist") != std::string::npos ||
-                       message.find("cannot open") != std::string::npos;
+  const bool missing =
+      message.find("does not exist") != std::string::npos || message.find("cannot open") != std::string::npos;
   PyErr_SetString(missing ? PyExc_FileNotFoundError : PyExc_ValueError, message.c_str());
   throw py::error_already_set();
 }
@@ -105,17 +105,21 @@ nlohmann::json number_or_null(double value) {
 /// summary; `raw_labels` (empty, or one per point) give model outputs their names in the ignored
 /// list; `file_warnings` are the C3D reader's. Runs without the GIL; errors are std exceptions
 /// or cli::UserError, translated by the caller.
-std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string& input, const std::string& name,
-                                          const std::vector<std::string>& raw_labels,
-                                          const std::vector<std::string>& file_warnings, const TrackSettings& settings) {
+std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string& input,
+                                          const std::string& name, const std::vector<std::string>& raw_labels,
+                                          const std::vector<std::string>& file_warnings,
+                                          const TrackSettings& settings) {
   if (settings.smooth && settings.method != "s2kf")
-    throw cli::UserError("smooth works on the S2KF's estimates; it cannot be combined with method='baseline'");
+    throw cli::UserError(
+        "smooth works on the S2KF's estimates; it cannot be combined with method='baseline'");
   if (source.frame_count() == 0) throw cli::UserError(input + ": the recording holds no complete frame");
-  if (settings.smooth &&
-      static_cast<double>(source.frame_count()) * track::TrackingSmoother::kBytesPerFrame > kSmoothingMemoryLimitBytes)
-    throw cli::UserError(input + ": " + std::to_string(source.frame_count()) +
-                         " frames are too many to smooth in memory; track without smoothing, or split the recording");
-  const cli::MarkerSetChoice choice = cli::choose_marker_set_for(source.labels(), settings.markerset, settings.subject);
+  if (settings.smooth && static_cast<double>(source.frame_count()) * track::TrackingSmoother::kBytesPerFrame >
+                             kSmoothingMemoryLimitBytes)
+    throw cli::UserError(
+        input + ": " + std::to_string(source.frame_count()) +
+        " frames are too many to smooth in memory; track without smoothing, or split the recording");
+  const cli::MarkerSetChoice choice =
+      cli::choose_marker_set_for(source.labels(), settings.markerset, settings.subject);
   track::SessionOptions session_options;
   try {
     session_options.tracker = track::preset_options(settings.preset, source.rate_hz());
@@ -159,7 +163,8 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
     throw cli::UserError(input + ": " + e.what());
   }
   if (run.frames_tracked == 0)
-    throw cli::UserError(input + ": no frame has the " + std::to_string(session.tracker.min_markers_to_start) +
+    throw cli::UserError(input + ": no frame has the " +
+                         std::to_string(session.tracker.min_markers_to_start) +
                          " visible markers needed to start tracking");
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
 
@@ -169,10 +174,11 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   const double overall = track::mean_from(run.mean_marker_distance, 0);
   nlohmann::json calibration_summary = nullptr;
   if (session.calibration)
-    calibration_summary = {{"frames", session.calibration_frames},
-                           {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
-                           {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
-                           {"segment_scale", session.calibration->segment_scale}};
+    calibration_summary = {
+        {"frames", session.calibration_frames},
+        {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
+        {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
+        {"segment_scale", session.calibration->segment_scale}};
   std::vector<double> latency_ms = run.seconds;
   for (double& s : latency_ms) s *= 1000;
   std::vector<std::string> markers_used;
@@ -198,7 +204,8 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
       {"mean_marker_distance_mm", number_or_null(level)},
       {"converged_frame", converged},
       {"mean_marker_distance_all_frames_mm", number_or_null(overall)},
-      {"latency_ms", {{"median", track::quantile(latency_ms, 0.5)}, {"p99", track::quantile(latency_ms, 0.99)}}},
+      {"latency_ms",
+       {{"median", track::quantile(latency_ms, 0.5)}, {"p99", track::quantile(latency_ms, 0.99)}}},
       {"samples", s2kf_method ? nlohmann::json(session.tracker.samples) : nlohmann::json(nullptr)},
       {"warnings", warnings},
   };
@@ -225,28 +232,34 @@ std::unique_ptr<TrackResult> track(const py::object& recording, const py::object
     // A C3D file: read as the program reads it, frame by frame.
     if (py::isinstance<py::str>(recording) || py::hasattr(recording, "__fspath__")) {
       if (!labels_value.is_none() || !rate_value.is_none())
-        throw py::value_error("labels and rate come from the C3D file; give them only with an array of points");
+        throw py::value_error(
+            "labels and rate come from the C3D file; give them only with an array of points");
       const std::string path = py::str(py::module_::import("os").attr("fspath")(recording));
       if (!fs::exists(path)) raise_user_error(path + ": no such file (it does not exist)");
       py::gil_scoped_release unlocked;
       c3d::C3dFrameSource source(path);
       std::vector<std::string> raw;
       for (const c3d::PointLabel& label : source.info().labels) raw.push_back(label.raw);
-      return run_pipeline(source, path, fs::path(path).stem().string(), raw, source.info().warnings, settings);
+      return run_pipeline(source, path, fs::path(path).stem().string(), raw, source.info().warnings,
+                          settings);
     }
     // Points with labels and a rate, given or taken from a read_c3d / simulate result.
     py::object points_value = recording, model_output = model_output_value;
     py::object labels_object = labels_value, rate_object = rate_value;
     std::vector<std::string> file_warnings;
-    if (py::hasattr(recording, "points") && py::hasattr(recording, "labels") && py::hasattr(recording, "rate")) {
+    if (py::hasattr(recording, "points") && py::hasattr(recording, "labels") &&
+        py::hasattr(recording, "rate")) {
       points_value = recording.attr("points");
       if (labels_object.is_none()) labels_object = recording.attr("labels");
       if (rate_object.is_none()) rate_object = recording.attr("rate");
-      if (model_output.is_none() && py::hasattr(recording, "model_output")) model_output = recording.attr("model_output");
-      if (py::hasattr(recording, "warnings")) file_warnings = recording.attr("warnings").cast<std::vector<std::string>>();
+      if (model_output.is_none() && py::hasattr(recording, "model_output"))
+        model_output = recording.attr("model_output");
+      if (py::hasattr(recording, "warnings"))
+        file_warnings = recording.attr("warnings").cast<std::vector<std::string>>();
     }
     if (labels_object.is_none() || rate_object.is_none())
-      throw py::value_error("track(points, labels, rate): labels and rate are needed with an array of points");
+      throw py::value_error(
+          "track(points, labels, rate): labels and rate are needed with an array of points");
     const auto labels = labels_object.cast<std::vector<std::string>>();
     const double rate = rate_object.cast<double>();
     if (!(rate > 0) || !std::isfinite(rate))
@@ -260,7 +273,8 @@ std::unique_ptr<TrackResult> track(const py::object& recording, const py::object
     if (!model_output.is_none()) {
       const auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(model_output);
       if (!mask || mask.ndim() != 1 || mask.shape(0) != point_count)
-        throw py::value_error("model_output must be one bool per point (" + std::to_string(point_count) + ")");
+        throw py::value_error("model_output must be one bool per point (" + std::to_string(point_count) +
+                              ")");
       for (py::ssize_t p = 0; p < point_count; ++p)
         if (mask.at(p)) matched[static_cast<std::size_t>(p)].clear();
     }
@@ -305,9 +319,10 @@ void write_summary(const TrackResult& r, const std::string& path) {
 }  // namespace
 
 void bind_track(py::module_& module) {
-  py::class_<TrackResult>(module, "TrackResult",
-                          "A tracked recording: the motion (arrays are views, one row per frame), the model it "
-                          "was tracked with, the program's summary, and writers for its output files.")
+  py::class_<TrackResult>(
+      module, "TrackResult",
+      "A tracked recording: the motion (arrays are views, one row per frame), the model it "
+      "was tracked with, the program's summary, and writers for its output files.")
       .def_property_readonly(
           "frame",
           [](const TrackResult& r) {
@@ -316,12 +331,19 @@ void bind_track(py::module_& module) {
             return out;
           },
           "(F,) frame numbers")
-      .def_property_readonly("time", [](const TrackResult& r) { return vector_copy(Eigen::Map<const Eigen::VectorXd>(r.run.motion.time.data(), static_cast<Eigen::Index>(r.run.motion.time.size()))); }, "(F,) s")
+      .def_property_readonly(
+          "time",
+          [](const TrackResult& r) {
+            return vector_copy(Eigen::Map<const Eigen::VectorXd>(
+                r.run.motion.time.data(), static_cast<Eigen::Index>(r.run.motion.time.size())));
+          },
+          "(F,) s")
       .def_property_readonly(
           "poses", [](py::object self) { return motion_columns_view(self, 0, 6 + body::kJointCount, false); },
           "(F, 46) root x, y, z (mm), roll, pitch, yaw (rad), joints (rad); NaN rows before tracking starts")
       .def_property_readonly(
-          "root_position", [](py::object self) { return motion_columns_view(self, 0, 3, false); }, "(F, 3) mm")
+          "root_position", [](py::object self) { return motion_columns_view(self, 0, 3, false); },
+          "(F, 3) mm")
       .def_property_readonly(
           "root_rpy", [](py::object self) { return motion_columns_view(self, 3, 3, false); }, "(F, 3) rad")
       .def_property_readonly(
@@ -331,8 +353,9 @@ void bind_track(py::module_& module) {
       .def_property_readonly(
           "marker_distance",
           [](const TrackResult& r) {
-            return vector_copy(Eigen::Map<const Eigen::VectorXd>(r.run.mean_marker_distance.data(),
-                                                                 static_cast<Eigen::Index>(r.run.mean_marker_distance.size())));
+            return vector_copy(Eigen::Map<const Eigen::VectorXd>(
+                r.run.mean_marker_distance.data(),
+                static_cast<Eigen::Index>(r.run.mean_marker_distance.size())));
           },
           "(F,) mean distance (mm) between the observed markers and the model's, NaN where none")
       .def_property_readonly(
@@ -346,27 +369,37 @@ void bind_track(py::module_& module) {
       .def_property_readonly(
           "seconds",
           [](const TrackResult& r) {
-            return vector_copy(Eigen::Map<const Eigen::VectorXd>(r.run.seconds.data(), static_cast<Eigen::Index>(r.run.seconds.size())));
+            return vector_copy(Eigen::Map<const Eigen::VectorXd>(
+                r.run.seconds.data(), static_cast<Eigen::Index>(r.run.seconds.size())));
           },
           "(F,) time the tracker spent per frame")
       .def_property_readonly(
-          "summary", [](const TrackResult& r) { return py::module_::import("json").attr("loads")(r.summary.dump()); },
+          "summary",
+          [](const TrackResult& r) { return py::module_::import("json").attr("loads")(r.summary.dump()); },
           "the dict `s2kf track` writes as PREFIX.json")
-      .def_property_readonly("messages", [](const TrackResult& r) { return r.messages; },
-                             "what the program prints about the marker set")
-      .def_property_readonly("model", [](const TrackResult& r) { return r.session.model; },
-                             "the body model tracked with: the marker set applied, scaled, calibrated")
+      .def_property_readonly(
+          "messages", [](const TrackResult& r) { return r.messages; },
+          "what the program prints about the marker set")
+      .def_property_readonly(
+          "model", [](const TrackResult& r) { return r.session.model; },
+          "the body model tracked with: the marker set applied, scaled, calibrated")
       .def_property_readonly("height_mm", [](const TrackResult& r) { return r.session.height_mm; })
-      .def("to_csv", [](const TrackResult& r, const std::string& path) { io::save_motion_csv(path, r.run.motion); },
-           py::arg("path"), "frame,time,root_x,...,RAy (mm, rad), as `s2kf track` writes PREFIX.csv")
-      .def("to_mot",
-           [](const TrackResult& r, const std::string& path) { io::save_opensim_mot(path, r.run.motion, r.name); },
-           py::arg("path"), "OpenSim motion file (degrees, metres)")
-      .def("to_bvh",
-           [](const TrackResult& r, const std::string& path) {
-             io::save_bvh(path, r.session.model, r.run.motion, r.session.rate_hz);
-           },
-           py::arg("path"), "BVH for Blender")
+      .def(
+          "to_csv",
+          [](const TrackResult& r, const std::string& path) { io::save_motion_csv(path, r.run.motion); },
+          py::arg("path"), "frame,time,root_x,...,RAy (mm, rad), as `s2kf track` writes PREFIX.csv")
+      .def(
+          "to_mot",
+          [](const TrackResult& r, const std::string& path) {
+            io::save_opensim_mot(path, r.run.motion, r.name);
+          },
+          py::arg("path"), "OpenSim motion file (degrees, metres)")
+      .def(
+          "to_bvh",
+          [](const TrackResult& r, const std::string& path) {
+            io::save_bvh(path, r.session.model, r.run.motion, r.session.rate_hz);
+          },
+          py::arg("path"), "BVH for Blender")
       .def("to_json", &write_summary, py::arg("path"), "the summary as `s2kf track` writes PREFIX.json")
       .def("to_marker_report", &write_marker_report, py::arg("path"),
            "frame,time,mean_marker_distance_mm,visible_markers (PREFIX_markers.csv)")
@@ -395,9 +428,10 @@ void bind_track(py::module_& module) {
 
   module.def(
       "track",
-      [](const py::object& recording, const py::object& labels, const py::object& rate, const py::object& markerset,
-         const py::object& subject, bool calibrate, std::int64_t calibration_frames, bool smooth, int samples,
-         double height_mm, const std::string& preset, const std::string& method, const py::object& model_output,
+      [](const py::object& recording, const py::object& labels, const py::object& rate,
+         const py::object& markerset, const py::object& subject, bool calibrate,
+         std::int64_t calibration_frames, bool smooth, int samples, double height_mm,
+         const std::string& preset, const std::string& method, const py::object& model_output,
          const py::object& name) {
         TrackSettings settings;
         settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();

@@ -12,9 +12,9 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/track/marker_mapping.hpp>
-#include <s2kf/track/tracker.hpp>
 #include <s2kf/track/marker_set_mapping.hpp>
 #include <s2kf/track/session.hpp>
+#include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 
 #include <pybind11/stl.h>
@@ -31,7 +31,8 @@ namespace {
 /// subject, labels mapped by the set's labels and aliases, the set's per-marker noise.
 std::unique_ptr<StreamingTracker> streaming_tracker_for_marker_set(const std::vector<std::string>& labels,
                                                                    double rate, const std::string& markerset,
-                                                                   double height_mm, track::TrackerOptions options) {
+                                                                   double height_mm,
+                                                                   track::TrackerOptions options) {
   if (!track::plausible_height_mm(height_mm))
     throw py::value_error("height_mm must lie between 300 and 3000, got " + number_text(height_mm));
   body::MarkerSet set;
@@ -43,19 +44,19 @@ std::unique_ptr<StreamingTracker> streaming_tracker_for_marker_set(const std::ve
   const body::BodyModel model = body::apply_marker_set(body::mmm_body_model(set.reference_height_mm), set);
   const track::MarkerMapping mapping = track::map_marker_set(labels, set);
   if (mapping.markers_used() == 0)
-    throw py::value_error("none of the " + std::to_string(labels.size()) + " labels is a marker of the marker set " +
-                          set.name);
+    throw py::value_error("none of the " + std::to_string(labels.size()) +
+                          " labels is a marker of the marker set " + set.name);
   if (!(rate > 0) || !std::isfinite(rate))
     throw py::value_error("the frame rate must be a positive number of Hz, got " + number_text(rate));
   options.marker_noise_mm_per_marker = track::marker_noise_of(set);
   py::gil_scoped_release unlocked;
   const SampleSet samples = lcd_sample_set(model.joint_count() + 6, options.samples).set;
-  return std::make_unique<StreamingTracker>(model.scaled(height_mm), mapping, std::move(options), rate, samples,
-                                            static_cast<Eigen::Index>(labels.size()));
+  return std::make_unique<StreamingTracker>(model.scaled(height_mm), mapping, std::move(options), rate,
+                                            samples, static_cast<Eigen::Index>(labels.size()));
 }
 
-track::TrackerOptions tracker_options(const std::string& preset, double rate, int samples, double marker_noise_mm,
-                                      double gate_probability) {
+track::TrackerOptions tracker_options(const std::string& preset, double rate, int samples,
+                                      double marker_noise_mm, double gate_probability) {
   track::TrackerOptions options;
   try {
     options = track::preset_options(preset, rate);
@@ -69,18 +70,21 @@ track::TrackerOptions tracker_options(const std::string& preset, double rate, in
   return options;
 }
 
-
 }  // namespace
 
 void bind_tracker(py::module_& module) {
   using track::FrameEstimate;
-  py::class_<FrameEstimate>(module, "FrameEstimate", "What the tracker knows after one frame (arrays are copies).")
+  py::class_<FrameEstimate>(module, "FrameEstimate",
+                            "What the tracker knows after one frame (arrays are copies).")
       .def_readonly("tracked", &FrameEstimate::tracked, "False before the first frame with enough markers")
-      .def_property_readonly("status", [](const FrameEstimate& e) { return std::string(to_string(e.status)); })
+      .def_property_readonly("status",
+                             [](const FrameEstimate& e) { return std::string(to_string(e.status)); })
       .def_property_readonly(
-          "root_position", [](const FrameEstimate& e) { return vector_copy(e.pose.root_position); }, "(3,) mm")
+          "root_position", [](const FrameEstimate& e) { return vector_copy(e.pose.root_position); },
+          "(3,) mm")
       .def_property_readonly(
-          "root_rpy", [](const FrameEstimate& e) { return vector_copy(e.pose.root_rpy); }, "(3,) roll, pitch, yaw, rad")
+          "root_rpy", [](const FrameEstimate& e) { return vector_copy(e.pose.root_rpy); },
+          "(3,) roll, pitch, yaw, rad")
       .def_property_readonly(
           "joints", [](const FrameEstimate& e) { return vector_copy(e.pose.joints); }, "(40,) rad")
       .def_property_readonly(
@@ -102,31 +106,35 @@ void bind_tracker(py::module_& module) {
       .def_readonly("nis", &FrameEstimate::nis)
       .def_readonly("seconds", &FrameEstimate::seconds, "time spent in the C++ tracker");
 
-  py::class_<StreamingTracker>(module, "Tracker",
-                               "The whole-body S2KF tracker, one frame at a time. `labels` name the points of "
-                               "each frame, matched to the model's markers by name (KIT names).")
-      .def(py::init([](const std::vector<std::string>& labels, double rate, const body::BodyModel* model,
-                       const py::object& markerset, double height_mm, int samples, const std::string& preset,
-                       double marker_noise_mm, double gate_probability) {
-             track::TrackerOptions options = tracker_options(preset, rate, samples, marker_noise_mm, gate_probability);
-             if (markerset.is_none())
-               return streaming_tracker_for_labels(labels, rate, model ? *model : body::mmm_body_model(height_mm),
-                                                   options);
-             if (model) throw py::value_error("give a model or a marker set, not both");
-             return streaming_tracker_for_marker_set(labels, rate, py::str(markerset), height_mm, options);
-           }),
-           py::arg("labels"), py::arg("rate"), py::arg("model") = nullptr, py::arg("markerset") = py::none(),
-           py::arg("height_mm") = 1750.0, py::arg("samples") = 301, py::arg("preset") = "default",
-           py::arg("marker_noise_mm") = 0.0, py::arg("gate_probability") = 0.0,
-           "labels: one per point; rate: Hz; model: a BodyModel whose marker names the labels are (default: "
-           "the KIT model at height_mm); markerset: 'kit', 'cmu', 'plugin_gait' or a .json file instead, on a "
-           "subject of height_mm; samples: S2KF sample count; preset: 'default' or 'paper'; marker_noise_mm: "
-           "0 keeps the preset's")
+  py::class_<StreamingTracker>(
+      module, "Tracker",
+      "The whole-body S2KF tracker, one frame at a time. `labels` name the points of "
+      "each frame, matched to the model's markers by name (KIT names).")
+      .def(
+          py::init([](const std::vector<std::string>& labels, double rate, const body::BodyModel* model,
+                      const py::object& markerset, double height_mm, int samples, const std::string& preset,
+                      double marker_noise_mm, double gate_probability) {
+            track::TrackerOptions options =
+                tracker_options(preset, rate, samples, marker_noise_mm, gate_probability);
+            if (markerset.is_none())
+              return streaming_tracker_for_labels(labels, rate,
+                                                  model ? *model : body::mmm_body_model(height_mm), options);
+            if (model) throw py::value_error("give a model or a marker set, not both");
+            return streaming_tracker_for_marker_set(labels, rate, py::str(markerset), height_mm, options);
+          }),
+          py::arg("labels"), py::arg("rate"), py::arg("model") = nullptr, py::arg("markerset") = py::none(),
+          py::arg("height_mm") = 1750.0, py::arg("samples") = 301, py::arg("preset") = "default",
+          py::arg("marker_noise_mm") = 0.0, py::arg("gate_probability") = 0.0,
+          "labels: one per point; rate: Hz; model: a BodyModel whose marker names the labels are (default: "
+          "the KIT model at height_mm); markerset: 'kit', 'cmu', 'plugin_gait' or a .json file instead, on a "
+          "subject of height_mm; samples: S2KF sample count; preset: 'default' or 'paper'; marker_noise_mm: "
+          "0 keeps the preset's")
       .def("process", &StreamingTracker::process, py::arg("frame"), py::arg("visible") = py::none(),
            "One frame: (P, 3) mm in label order (NaN: hidden), optional (P,) visibility. Returns a "
            "FrameEstimate. Runs without the GIL.")
       .def_property_readonly("model", [](const StreamingTracker& t) { return t.tracker().model(); })
-      .def_property_readonly("joint_names", [](const StreamingTracker& t) { return t.tracker().model().joint_names(); })
+      .def_property_readonly("joint_names",
+                             [](const StreamingTracker& t) { return t.tracker().model().joint_names(); })
       .def_property_readonly("markers_used",
                              [](const StreamingTracker& t) {
                                std::vector<std::string> names;
@@ -136,8 +144,10 @@ void bind_tracker(py::module_& module) {
                              })
       .def_property_readonly("ignored_labels",
                              [](const StreamingTracker& t) { return t.tracker().mapping().ignored_labels; })
-      .def_property_readonly("samples", [](const StreamingTracker& t) { return t.tracker().options().samples; })
-      .def_property_readonly("initialised", [](const StreamingTracker& t) { return t.tracker().initialised(); })
+      .def_property_readonly("samples",
+                             [](const StreamingTracker& t) { return t.tracker().options().samples; })
+      .def_property_readonly("initialised",
+                             [](const StreamingTracker& t) { return t.tracker().initialised(); })
       .def_property_readonly("frames_processed",
                              [](const StreamingTracker& t) { return t.tracker().frames_processed(); });
 }

@@ -47,7 +47,8 @@ TEST(MmmMotion, IsWellFormedWithModelPoseAndKinematicSensorsThatReadBack) {
   EXPECT_NE(text.find("<Sensor type=\"Kinematic\" version=\"1.0\">"), std::string::npos);
   std::vector<std::string> joints;
   const std::regex joint(R"re(<Joint name="([^"]+)" />)re");
-  for (std::sregex_iterator it(text.begin(), text.end(), joint), end; it != end; ++it) joints.push_back((*it)[1]);
+  for (std::sregex_iterator it(text.begin(), text.end(), joint), end; it != end; ++it)
+    joints.push_back((*it)[1]);
   ASSERT_EQ(joints.size(), 40u);
   EXPECT_EQ(joints.front(), "BPx_joint");
   EXPECT_EQ(joints.back(), "RAy_joint");
@@ -62,7 +63,7 @@ TEST(MmmMotion, IsWellFormedWithModelPoseAndKinematicSensorsThatReadBack) {
     const Eigen::Index r = rows[k];
     EXPECT_NEAR(std::stod((*it)[1]), motion.time[static_cast<std::size_t>(r)], 1e-12);
     const std::vector<double> position = numbers_of((*it)[2]), rotation = numbers_of((*it)[3]);
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(position[c], motion.values(r, c), 1e-5);  // mm
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(position[c], motion.values(r, c), 1e-5);      // mm
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(rotation[c], motion.values(r, 3 + c), 1e-8);  // rad
   }
   EXPECT_EQ(k, rows.size());
@@ -92,7 +93,8 @@ TEST(MotionDerivatives, MatchTheAnalyticDerivativesOfASinusoidalMotion) {
     for (int c = 0; c < columns; ++c) motion.values(r, c) = amplitude(c) * std::sin(omega * r * h + 0.1 * c);
   }
   // Yaw turning steadily through +-180 deg: the angle jumps by 2 pi, the rate does not.
-  for (int r = 0; r < frames; ++r) motion.values(r, 5) = std::remainder(3.0 + 2.0 * r * h, 2 * 3.14159265358979);
+  for (int r = 0; r < frames; ++r)
+    motion.values(r, 5) = std::remainder(3.0 + 2.0 * r * h, 2 * 3.14159265358979);
   motion.values.row(30).setConstant(NAN);  // untracked: NaN there, one-sided next to it
 
   const auto [velocity, acceleration] = io::motion_derivatives(motion);
@@ -104,7 +106,8 @@ TEST(MotionDerivatives, MatchTheAnalyticDerivativesOfASinusoidalMotion) {
       if (r == 30) {
         EXPECT_TRUE(std::isnan(velocity.values(r, c)) && std::isnan(acceleration.values(r, c)));
       } else if (interior) {
-        EXPECT_NEAR(velocity.values(r, c), a * omega * std::cos(phase), a * std::pow(omega, 3) * h * h / 6 + 1e-9);
+        EXPECT_NEAR(velocity.values(r, c), a * omega * std::cos(phase),
+                    a * std::pow(omega, 3) * h * h / 6 + 1e-9);
         EXPECT_NEAR(acceleration.values(r, c), -a * omega * omega * std::sin(phase),
                     a * std::pow(omega, 4) * h * h / 12 + 1e-6);
       } else {  // one-sided: first order, |error| <= A w^2 h / 2

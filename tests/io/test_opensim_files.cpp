@@ -76,7 +76,8 @@ TEST(OpenSimModel, IsWellFormedXmlWithTheMotColumnsAsCoordinatesAndTheLimitsAsRa
   // The markers asked for, and only those.
   std::set<std::string> markers;
   const std::regex marker(R"re(<Marker name="([^"]+)">)re");
-  for (std::sregex_iterator it(text.begin(), text.end(), marker), end; it != end; ++it) markers.insert((*it)[1]);
+  for (std::sregex_iterator it(text.begin(), text.end(), marker), end; it != end; ++it)
+    markers.insert((*it)[1]);
   EXPECT_EQ(markers, (std::set<std::string>{"C7", "LAOL", "LASI", "RKNE"}));
   EXPECT_THROW(io::save_opensim_model(dir + "/bad.osim", model, "bad", {"NOPE"}), std::invalid_argument);
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.osim"));
@@ -115,8 +116,8 @@ TEST(OpenSimModel, AnIndependentReadingPutsEveryMarkerWhereForwardKinematicsDoes
     Eigen::Vector3d ground_m;
     in >> name >> ground_m.x() >> ground_m.y() >> ground_m.z();
     const Eigen::VectorXd row = motion.values.row(pose).transpose();
-    const Eigen::Matrix3Xd lab = body::marker_positions(model, row.head<3>(), body::rotation_from_rpy(row.segment<3>(3)),
-                                                        row.tail(model.joint_count()));
+    const Eigen::Matrix3Xd lab = body::marker_positions(
+        model, row.head<3>(), body::rotation_from_rpy(row.segment<3>(3)), row.tail(model.joint_count()));
     const Eigen::Vector3d expected_m = ground_from_lab * lab.col(model.marker_index(name)) / 1000.0;
     const double error_mm = 1000 * (ground_m - expected_m).norm();
     EXPECT_LT(error_mm, 1e-6) << name << " in pose " << pose;
@@ -160,8 +161,9 @@ TEST(Trc, FollowsOpenSimsLayoutInItsGroundFrameWithEmptyCellsForMissingMarkers) 
   const std::vector<std::string> lines = lines_of(out.str());
   ASSERT_EQ(lines.size(), 8u);
   EXPECT_EQ(lines[0], "PathFileType\t4\t(X/Y/Z)\twalk.trc");
-  EXPECT_EQ(cells_of(lines[1]), (std::vector<std::string>{"DataRate", "CameraRate", "NumFrames", "NumMarkers", "Units",
-                                                          "OrigDataRate", "OrigDataStartFrame", "OrigNumFrames"}));
+  EXPECT_EQ(cells_of(lines[1]),
+            (std::vector<std::string>{"DataRate", "CameraRate", "NumFrames", "NumMarkers", "Units",
+                                      "OrigDataRate", "OrigDataStartFrame", "OrigNumFrames"}));
   EXPECT_EQ(cells_of(lines[2]), (std::vector<std::string>{"100", "100", "2", "2", "mm", "100", "1", "2"}));
   EXPECT_EQ(cells_of(lines[3]), (std::vector<std::string>{"Frame#", "Time", "LASI", "", "", "RASI", "", ""}));
   EXPECT_EQ(cells_of(lines[4]), (std::vector<std::string>{"", "", "X1", "Y1", "Z1", "X2", "Y2", "Z2"}));

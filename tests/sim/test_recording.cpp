@@ -82,8 +82,7 @@ TEST(Recording, SensorNoiseHasTheRequestedStandardDeviation) {
   double sum = 0, sum_squared = 0;
   long n = 0;
   for (Eigen::Index k = 0; k < recording.frames(); ++k) {
-    const Eigen::Matrix3Xd error =
-        recording.frame(k) - recording.clean[static_cast<std::size_t>(k)];
+    const Eigen::Matrix3Xd error = recording.frame(k) - recording.clean[static_cast<std::size_t>(k)];
     sum += error.sum();
     sum_squared += error.squaredNorm();
     n += error.size();
@@ -152,7 +151,8 @@ TEST(Recording, IsDeterminedByTheSeed) {
   all_equal = a.positions.cwiseEqual(b.positions).count() +
                   (a.positions.array().isNaN() && b.positions.array().isNaN()).count() ==
               a.positions.size();
-  for (std::size_t k = 0; k < a.clean.size(); ++k) any_different = any_different || !(a.clean[k] == c.clean[k]);
+  for (std::size_t k = 0; k < a.clean.size(); ++k)
+    any_different = any_different || !(a.clean[k] == c.clean[k]);
   EXPECT_TRUE(all_equal);
   EXPECT_TRUE((a.visible == b.visible).all());
   EXPECT_TRUE(any_different);
@@ -173,8 +173,7 @@ TEST(Recording, HiddenMarkersAreNaNAndPlannedLossesHideWhatTheySay) {
       const bool in_segment = std::find(forearm.begin(), forearm.end(), m) != forearm.end();
       const bool expected_visible = !blackout && !(dropout && in_segment);
       ASSERT_EQ(recording.visible(m, k), expected_visible) << "frame " << k << " marker " << m;
-      ASSERT_EQ(recording.frame(k).col(m).array().isNaN().all(),
-                !expected_visible);
+      ASSERT_EQ(recording.frame(k).col(m).array().isNaN().all(), !expected_visible);
     }
   }
   EXPECT_NEAR(recording.hidden_fraction(), (100.0 * 50 + 50.0 * 4) / (400.0 * 50), 1e-12);

@@ -120,7 +120,8 @@ TEST(TrackerAllocation, SteadyStateFramesWithChangingOcclusionAllocateNothing) {
     heights.add_frame(recording.frame(f), recording.visible.col(f));
   model = model.scaled(heights.height_mm().value_or(1750));
   ASSERT_EQ(mapping.markers_used(), 50);
-  track::Tracker tracker(model, mapping, track::TrackerOptions{}, recording.info.rate, test::tracker_samples());
+  track::Tracker tracker(model, mapping, track::TrackerOptions{}, recording.info.rate,
+                         test::tracker_samples());
 
   // Frames and visibility prepared up front: hidden blocks of 0..24 markers that move every frame,
   // one frame with every marker hidden and one with a NaN coordinate on a "visible" marker.

@@ -148,7 +148,8 @@ track::SubjectCalibration calibrate(const body::BodyModel& model, const Syntheti
   track::CalibrationOptions options;
   options.final_pass = false;
   return track::calibrate_subject(model, track::map_markers(s.recording.labels, model.marker_names()),
-                                  fast_options(), s.recording, test::tracker_samples(fast_options()), options);
+                                  fast_options(), s.recording, test::tracker_samples(fast_options()),
+                                  options);
 }
 
 io::MotionTable track_all(const body::BodyModel& model, const Synthetic& s,
@@ -245,7 +246,8 @@ TEST(SubjectCalibration, RejectsInputsThatCannotBeCalibrated) {
   none.labels = model.marker_names();
   none.rate_hz = 100;
   none.resize(0);
-  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), none, samples), std::invalid_argument);
+  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), none, samples),
+               std::invalid_argument);
   track::CalibrationOptions options;
   options.iterations = 0;
   MarkerSequence one = none;
@@ -294,10 +296,9 @@ TEST(TrackerMarkerNoise, NoisyMarkerBarelyMovesTheEstimate) {
 
   track::TrackerOptions wrong = plain;
   wrong.marker_noise_mm_per_marker.assign(count - 1, 10.0);
-  EXPECT_THROW(
-      track::Tracker(model, track::map_markers(s.recording.labels, model.marker_names()), wrong, 100.0,
-                     test::tracker_samples(wrong)),
-      std::invalid_argument);
+  EXPECT_THROW(track::Tracker(model, track::map_markers(s.recording.labels, model.marker_names()), wrong,
+                              100.0, test::tracker_samples(wrong)),
+               std::invalid_argument);
   wrong.marker_noise_mm_per_marker.assign(count, -1.0);
   EXPECT_THROW(wrong.validate(), std::invalid_argument);
 }

@@ -232,8 +232,10 @@ TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
   };
   track::TrackerOptions options;
   options.samples = 93;
-  track::Tracker tracker(setup.model, setup.mapping, options, recording.rate_hz, test::tracker_samples(options));
-  const track::TrackingRun by_hand = track::run_tracking(tracker, next, recording.rate_hz, setup.model.joint_names());
+  track::Tracker tracker(setup.model, setup.mapping, options, recording.rate_hz,
+                         test::tracker_samples(options));
+  const track::TrackingRun by_hand =
+      track::run_tracking(tracker, next, recording.rate_hz, setup.model.joint_names());
   f = 0;
   track::GradientBaseline gradient(setup.model, setup.mapping);
   const track::TrackingRun by_hand_baseline =

@@ -51,7 +51,9 @@ TEST(Session, FileAndMemorySourcesGiveTheSameSessionAndRun) {
   ASSERT_EQ(rows.size(), 150u);
   ASSERT_EQ(kept.motion.frames(), 150);
   for (Eigen::Index r = 0; r < 150; ++r)
-    EXPECT_EQ((rows[static_cast<std::size_t>(r)] - kept.motion.values.row(r).transpose()).cwiseAbs().maxCoeff(), 0.0)
+    EXPECT_EQ(
+        (rows[static_cast<std::size_t>(r)] - kept.motion.values.row(r).transpose()).cwiseAbs().maxCoeff(),
+        0.0)
         << r;
   EXPECT_EQ(streamed.mean_marker_distance, kept.mean_marker_distance);
   EXPECT_TRUE(std::isfinite(track::calibrated_distance_mm(from_memory, kept)));
@@ -94,7 +96,8 @@ TEST(Session, StopsAtCoordinatesBeyondAKilometre) {
   track::SessionOptions options;
   options.calibrate = false;
   options.height_mm = 1750;
-  const track::Session session = track::prepare_session(source, kit_like_set(), options, test::tracker_samples());
+  const track::Session session =
+      track::prepare_session(source, kit_like_set(), options, test::tracker_samples());
   try {
     track::run_session(session, source, test::tracker_samples());
     FAIL() << "a point 5 km away was tracked";
@@ -130,7 +133,8 @@ TEST(StateChart, FoldingKeepsAnglesAndItsInverseRestoresTheState) {
   Eigen::VectorXd restored = mean;
   Eigen::MatrixXd restored_covariance = covariance;
   track::to_previous_chart(reference, reference, before, restored, restored_covariance);
-  EXPECT_LT((restored.tail(model.joint_count()) - before.tail(model.joint_count())).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((restored.tail(model.joint_count()) - before.tail(model.joint_count())).cwiseAbs().maxCoeff(),
+            1e-9);
   EXPECT_LT((restored_covariance - covariance_before).cwiseAbs().maxCoeff(), 1e-15);
   // A reference change moves the orientation error so that the rotation stays the same.
   const Eigen::Matrix3d next = reference * body::rotation_exp(Eigen::Vector3d(0.02, 0.0, 0.01));

@@ -40,7 +40,8 @@ Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0) {
   for (Eigen::Index f = 0; f < recording.frame_count(); f += 5)
     heights.add_frame(recording.frame(f), recording.visible.col(f));
   model = model.scaled(heights.height_mm().value_or(1750));
-  track::Tracker tracker(model, mapping, track::TrackerOptions{}, recording.info.rate, test::tracker_samples());
+  track::Tracker tracker(model, mapping, track::TrackerOptions{}, recording.info.rate,
+                         test::tracker_samples());
   track::TrackingSmoother smoother(tracker);
   const Eigen::Index end = frames > 0 ? std::min(frames, recording.frame_count()) : recording.frame_count();
   Eigen::Index f = 0;

@@ -577,7 +577,8 @@ TEST(MotionStreamWriter, WritesWhatTheBatchWritersWriteWhereverRowsAreUntracked)
     io::save_motion_csv(batch + ".csv", motion);
     io::save_opensim_mot(batch + ".mot", motion, name);
     io::save_bvh(batch + ".bvh", model, motion, 120);
-    io::MotionStreamWriter writer({stream + ".csv", stream + ".mot", stream + ".bvh", "", "", ""}, model, 120, name);
+    io::MotionStreamWriter writer({stream + ".csv", stream + ".mot", stream + ".bvh", "", "", ""}, model, 120,
+                                  name);
     for (Eigen::Index r = 0; r < motion.frames(); ++r)
       writer.append(motion.frame[r], motion.time[r], motion.values.row(r).transpose());
     EXPECT_FALSE(fs::exists(stream + ".csv"));  // nothing under the target names before finish()
@@ -656,8 +657,8 @@ TEST(MotionStreamWriter, AnAbandonedWriterLeavesNoTargetAndNoTemporary) {
   const body::BodyModel model = body::mmm_body_model(1750);
   const fs::path dir = empty_scratch("stream_abandoned");
   std::ofstream(dir / "x.csv") << "an earlier result\n";
-  const io::MotionFilePaths paths{(dir / "x.csv").string(), (dir / "x.mot").string(), (dir / "x.bvh").string(),
-                                  "", "", ""};
+  const io::MotionFilePaths paths{
+      (dir / "x.csv").string(), (dir / "x.mot").string(), (dir / "x.bvh").string(), "", "", ""};
   const io::MotionTable motion = random_motion(model, 6, {0, 3});
   {
     io::MotionStreamWriter writer(paths, model, 100, "x");

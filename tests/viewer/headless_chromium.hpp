@@ -37,10 +37,12 @@ inline std::string slurp(const std::filesystem::path& path) {
 /// Runs chromium headless on `url` with `mode` ("--dump-dom" or "--screenshot=FILE"). The flags
 /// keep it offline and quiet (no sync, updates, QUIC or background requests) and give WebGL a
 /// software rasteriser (SwiftShader), which headless machines without a GPU need.
-inline ChromiumRun run_chromium(const std::string& url, const std::string& mode, const std::filesystem::path& work) {
+inline ChromiumRun run_chromium(const std::string& url, const std::string& mode,
+                                const std::filesystem::path& work) {
   namespace fs = std::filesystem;
   static int run = 0;
-  const fs::path profile = work / ("chromium_profile_" + std::to_string(::getpid()) + "_" + std::to_string(run++));
+  const fs::path profile =
+      work / ("chromium_profile_" + std::to_string(::getpid()) + "_" + std::to_string(run++));
   fs::remove_all(profile);
   fs::create_directories(profile);
   const fs::path out = profile / "stdout.txt", err = profile / "stderr.txt";
@@ -49,8 +51,9 @@ inline ChromiumRun run_chromium(const std::string& url, const std::string& mode,
       "\" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking"
       " --disable-component-update --disable-sync --use-angle=swiftshader --enable-unsafe-swiftshader"
       " --hide-scrollbars --window-size=1280,720 --enable-logging=stderr --v=0 --virtual-time-budget=8000"
-      " --user-data-dir=\"" + profile.string() + "\" " + mode + " \"" + url + "\" > \"" + out.string() + "\" 2> \"" +
-      err.string() + "\"";
+      " --user-data-dir=\"" +
+      profile.string() + "\" " + mode + " \"" + url + "\" > \"" + out.string() + "\" 2> \"" + err.string() +
+      "\"";
   const int raw = std::system(command.c_str());
   ChromiumRun result;
   result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
@@ -68,8 +71,9 @@ inline std::string chromium_unavailable_reason(const std::filesystem::path& work
   namespace fs = std::filesystem;
   fs::create_directories(work);
   const fs::path probe = work / "chromium_probe.html";
-  std::ofstream(probe) << "<!doctype html><p id=probe></p><script>document.getElementById('probe').textContent="
-                          "'ran'</script>";
+  std::ofstream(probe)
+      << "<!doctype html><p id=probe></p><script>document.getElementById('probe').textContent="
+         "'ran'</script>";
   const ChromiumRun run = run_chromium("file://" + fs::absolute(probe).string(), "--dump-dom", work);
   if (run.stdout_text.find("<p id=\"probe\">ran</p>") == std::string::npos)
     return path + " does not run headless here (exit status " + std::to_string(run.status) +

@@ -52,7 +52,8 @@ nlohmann::json scene_state(const std::string& dom) {
   if (begin == std::string::npos) return nullptr;
   const std::size_t end = dom.find("</pre>", begin);
   std::string text = dom.substr(begin + open.size(), end - begin - open.size());
-  const std::pair<const char*, const char*> entities[] = {{"&lt;", "<"}, {"&gt;", ">"}, {"&quot;", "\""}, {"&amp;", "&"}};
+  const std::pair<const char*, const char*> entities[] = {
+      {"&lt;", "<"}, {"&gt;", ">"}, {"&quot;", "\""}, {"&amp;", "&"}};
   for (const auto& [entity, character] : entities)
     for (std::size_t at = 0; (at = text.find(entity, at)) != std::string::npos; ++at)
       text.replace(at, std::string(entity).size(), character);
@@ -73,8 +74,9 @@ class ViewerPage : public ::testing::Test {
     ASSERT_EQ(simulate.status, 0) << simulate.output;
     truth_ = (kWork / "handstand_truth.csv").string();
     plain_ = (kWork / "plain").string();
-    const auto plain = run_command("track " + recording_ + " --out " + plain_ + " --markerset kit --no-calibrate" +
-                                   " --height " + std::to_string(kHeightMm) + " --truth " + truth_ + " --html --quiet");
+    const auto plain =
+        run_command("track " + recording_ + " --out " + plain_ + " --markerset kit --no-calibrate" +
+                    " --height " + std::to_string(kHeightMm) + " --truth " + truth_ + " --html --quiet");
     ASSERT_EQ(plain.status, 0) << plain.output;
     calibrated_ = (kWork / "calibrated").string();
     const auto calibrated = run_command("track " + recording_ + " --out " + calibrated_ + " --html --quiet");
@@ -92,13 +94,14 @@ class ViewerPage : public ::testing::Test {
                                                       "--dump-dom", kWork);
     EXPECT_EQ(run.stderr_text.find("Uncaught"), std::string::npos) << run.stderr_text;
     const nlohmann::json state = scene_state(run.stdout_text);
-    EXPECT_TRUE(state.is_object()) << "no scene state in the page; chromium said:\n" << run.stderr_text.substr(0, 2000);
+    EXPECT_TRUE(state.is_object()) << "no scene state in the page; chromium said:\n"
+                                   << run.stderr_text.substr(0, 2000);
     return state.is_object() ? state : nlohmann::json::object();
   }
 
   /// Joint centres (mm) of a row of a motion CSV, posed on `model` by the library.
-  static std::vector<Eigen::Vector3d> fk_joints(const s2kf::body::BodyModel& model, const s2kf::io::MotionTable& motion,
-                                                long frame) {
+  static std::vector<Eigen::Vector3d> fk_joints(const s2kf::body::BodyModel& model,
+                                                const s2kf::io::MotionTable& motion, long frame) {
     const auto row = motion.values.row(frame);
     s2kf::body::Pose pose;
     pose.root_position = row.segment<3>(0).transpose();
@@ -111,7 +114,8 @@ class ViewerPage : public ::testing::Test {
   }
 
   /// Largest distance (mm) between the page's joint centres and `expected`.
-  static double largest_joint_error(const nlohmann::json& state, const std::vector<Eigen::Vector3d>& expected) {
+  static double largest_joint_error(const nlohmann::json& state,
+                                    const std::vector<Eigen::Vector3d>& expected) {
     EXPECT_EQ(state["joints"].size(), expected.size());
     double worst = 0;
     for (std::size_t p = 0; p < std::min(expected.size(), state["joints"].size()); ++p) {
@@ -161,10 +165,12 @@ TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
     const Eigen::Vector4d clip = view_projection * (Eigen::Vector4d() << expected[p] * 0.001, 1).finished();
     const double x = (clip.x() / clip.w() + 1) / 2 * width, y = (1 - clip.y() / clip.w()) / 2 * height;
     const auto& joint = state["joints"][p];
-    worst_pixel = std::max(worst_pixel, std::hypot(x - joint["pixel"][0].get<double>(), y - joint["pixel"][1].get<double>()));
+    worst_pixel = std::max(
+        worst_pixel, std::hypot(x - joint["pixel"][0].get<double>(), y - joint["pixel"][1].get<double>()));
     ASSERT_TRUE(x > 0 && x < width && y > 0 && y < height) << "joint " << p << " is off the canvas";
     const auto& rgb = joint["rgb"];
-    const bool joint_colour = std::abs(rgb[0].get<int>() - 0xf2) <= 2 && std::abs(rgb[1].get<int>() - 0xf2) <= 2 &&
+    const bool joint_colour = std::abs(rgb[0].get<int>() - 0xf2) <= 2 &&
+                              std::abs(rgb[1].get<int>() - 0xf2) <= 2 &&
                               std::abs(rgb[2].get<int>() - 0xf2) <= 2;
     EXPECT_TRUE(joint_colour) << joint["name"] << " at pixel (" << x << ", " << y << ") shows " << rgb.dump();
     drawn += joint_colour;
@@ -181,7 +187,8 @@ TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
                                    "--screenshot=" + screenshot.string(), kWork);
   ASSERT_TRUE(fs::exists(screenshot));
   EXPECT_GT(fs::file_size(screenshot), 20000u) << "a blank screenshot";
-  fs::copy_file(screenshot, fs::path(S2KF_TEST_TMP_DIR) / "viewer_frame100.png", fs::copy_options::overwrite_existing);
+  fs::copy_file(screenshot, fs::path(S2KF_TEST_TMP_DIR) / "viewer_frame100.png",
+                fs::copy_options::overwrite_existing);
 }
 
 TEST_F(ViewerPage, TimelineMovesTheSkeleton) {
@@ -203,7 +210,8 @@ TEST_F(ViewerPage, TruthIsShownAndTheDataLayoutIsAsDocumented) {
   const std::size_t begin = page.find("<script type=\"application/json\" id=\"s2kf-meta\">");
   ASSERT_NE(begin, std::string::npos);
   const std::size_t start = page.find('>', begin) + 1;
-  const nlohmann::json meta = nlohmann::json::parse(page.substr(start, page.find("</script>", start) - start));
+  const nlohmann::json meta =
+      nlohmann::json::parse(page.substr(start, page.find("</script>", start) - start));
   // docs/viewer.md: frame, time, pose (46), mean distance, 17 joint centres, 50 model markers, 50
   // recorded markers and, with --truth, 17 true joint centres: 451 floats, 1804 bytes per frame.
   EXPECT_EQ(meta["floats_per_frame"], 1 + 1 + 46 + 1 + 3 * 17 + 3 * 50 + 3 * 50 + 3 * 17);
@@ -237,7 +245,8 @@ TEST_F(ViewerPage, ViewRebuildsTheTrackedModelOfACalibratedRun) {
 TEST_F(ViewerPage, LongMotionsAreDecimatedAndThePageSaysSo) {
   SKIP_WITHOUT_CHROMIUM();
   const std::string prefix = (kWork / "decimated").string();
-  for (const char* suffix : {".csv", ".json"}) fs::copy_file(plain_ + suffix, prefix + suffix, fs::copy_options::overwrite_existing);
+  for (const char* suffix : {".csv", ".json"})
+    fs::copy_file(plain_ + suffix, prefix + suffix, fs::copy_options::overwrite_existing);
   // 0.1 MiB holds 58 of the 150 records of 1804 bytes: every 3rd frame.
   const auto view = run_command("view " + prefix + " --truth " + truth_ + " --max-data-mb 0.1");
   ASSERT_EQ(view.status, 0) << view.output;
@@ -246,7 +255,8 @@ TEST_F(ViewerPage, LongMotionsAreDecimatedAndThePageSaysSo) {
   EXPECT_TRUE(state["decimated"].get<bool>());
   EXPECT_EQ(state["frames_stored"], 50);
   EXPECT_EQ(state["frame"], 30) << "the nearest stored frame";
-  const auto run = s2kf::test_support::run_chromium("file://" + fs::absolute(prefix + ".html").string(), "--dump-dom", kWork);
+  const auto run = s2kf::test_support::run_chromium("file://" + fs::absolute(prefix + ".html").string(),
+                                                    "--dump-dom", kWork);
   EXPECT_NE(run.stdout_text.find("1 frame in 3 is shown (50 of 150 frames)"), std::string::npos);
 }
 
@@ -275,7 +285,8 @@ TEST_F(ViewerPage, DamagedDataBlocksAreNamedOnThePage) {
   for (const Damage& damage : damages) {
     const fs::path page = kWork / ("damaged_" + damage.name + ".html");
     std::ofstream(page, std::ios::binary) << damage.page;
-    const auto run = s2kf::test_support::run_chromium("file://" + fs::absolute(page).string(), "--dump-dom", kWork);
+    const auto run =
+        s2kf::test_support::run_chromium("file://" + fs::absolute(page).string(), "--dump-dom", kWork);
     const nlohmann::json state = scene_state(run.stdout_text);
     ASSERT_TRUE(state.is_object()) << damage.name;
     EXPECT_FALSE(state["ok"].get<bool>()) << damage.name;

@@ -8,12 +8,12 @@
 
 namespace s2kf::cli::viewer {
 
-std::string three_module_source();      ///< third_party/three/three.module.min.js
-std::string orbit_controls_source();    ///< third_party/three/OrbitControls.js
-std::string three_licence_text();       ///< third_party/three/LICENSE
-std::string page_template();            ///< examples/s2kf/viewer/viewer.html
-std::string page_style();               ///< examples/s2kf/viewer/viewer.css
-std::string page_script();              ///< examples/s2kf/viewer/viewer.js
-const char* three_version();            ///< the vendored three.js version, e.g. "0.170.0"
+std::string three_module_source();    ///< third_party/three/three.module.min.js
+std::string orbit_controls_source();  ///< third_party/three/OrbitControls.js
+std::string three_licence_text();     ///< third_party/three/LICENSE
+std::string page_template();          ///< examples/s2kf/viewer/viewer.html
+std::string page_style();             ///< examples/s2kf/viewer/viewer.css
+std::string page_script();            ///< examples/s2kf/viewer/viewer.js
+const char* three_version();          ///< the vendored three.js version, e.g. "0.170.0"
 
 }  // namespace s2kf::cli::viewer

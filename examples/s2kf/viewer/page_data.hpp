@@ -39,8 +39,8 @@ struct DataBlock {
 /// The points the page draws the skeleton with: the root and every frame that has its own joint
 /// centre (the 2nd and 3rd DoF of a joint group share the first one's), linked parent to child.
 struct Skeleton {
-  std::vector<int> frames;               ///< model frame index of each point
-  std::vector<std::string> names;        ///< "root" or the joint group, e.g. "LK"
+  std::vector<int> frames;                 ///< model frame index of each point
+  std::vector<std::string> names;          ///< "root" or the joint group, e.g. "LK"
   std::vector<std::pair<int, int>> bones;  ///< point indices, parent first
 };
 
@@ -69,14 +69,14 @@ inline Skeleton skeleton_of(const body::BodyModel& model) {
 /// The page's data: the records and how to read them.
 struct PageData {
   Skeleton skeleton;
-  std::vector<int> markers;          ///< model marker indices shown (the mapped ones), in model order
+  std::vector<int> markers;  ///< model marker indices shown (the mapped ones), in model order
   std::vector<DataBlock> blocks;
   int floats_per_frame = 0;
-  long frames_in_motion = 0;         ///< rows of the motion
+  long frames_in_motion = 0;  ///< rows of the motion
   long frames_stored = 0;
-  long stride = 1;                   ///< every stride-th row is stored
+  long stride = 1;  ///< every stride-th row is stored
   std::size_t data_limit_bytes = kDefaultDataLimitBytes;
-  std::string bytes;                 ///< frames_stored * floats_per_frame little-endian float32
+  std::string bytes;  ///< frames_stored * floats_per_frame little-endian float32
 };
 
 namespace detail {
@@ -87,9 +87,7 @@ inline void append_float(std::string& bytes, double value) {
   for (int shift = 0; shift < 32; shift += 8) bytes += static_cast<char>((bits >> shift) & 0xffu);
 }
 
-inline body::Pose pose_of(const io::MotionRowRef& values) {
-  return body::pose_from_row(values);
-}
+inline body::Pose pose_of(const io::MotionRowRef& values) { return body::pose_from_row(values); }
 }  // namespace detail
 
 /// Builds the records. `recording` is read from its current position, one frame per motion row
@@ -155,11 +153,12 @@ inline PageData build_page_data(const body::BodyModel& model, const track::Marke
       for (int r = 0; r < 3; ++r) detail::append_float(data.bytes, positions(r, k));
   };
   c3d::Frame frame;
-  Eigen::Matrix3Xd joints(3, points), model_markers(3, markers), recorded(3, markers), truth_joints(3, points);
+  Eigen::Matrix3Xd joints(3, points), model_markers(3, markers), recorded(3, markers),
+      truth_joints(3, points);
   for (std::size_t row = 0; row < rows; ++row) {
     if (!recording.read_frame(frame))
-      throw std::runtime_error("the recording ends after " + std::to_string(row) + " frames, the motion has " +
-                               std::to_string(rows) + " rows");
+      throw std::runtime_error("the recording ends after " + std::to_string(row) +
+                               " frames, the motion has " + std::to_string(rows) + " rows");
     if (frame.index != motion.frame[row])
       throw std::runtime_error("the motion's row " + std::to_string(row) + " is frame " +
                                std::to_string(motion.frame[row]) + ", the recording's frame there is " +
@@ -172,15 +171,19 @@ inline PageData build_page_data(const body::BodyModel& model, const track::Marke
     if (io::is_tracked_row(values)) {
       const body::FrameTransforms frames = body::joint_frames(model, detail::pose_of(values));
       for (int p = 0; p < points; ++p)
-        joints.col(p) = frames.origins[static_cast<std::size_t>(data.skeleton.frames[static_cast<std::size_t>(p)])];
+        joints.col(p) =
+            frames.origins[static_cast<std::size_t>(data.skeleton.frames[static_cast<std::size_t>(p)])];
       const Eigen::Matrix3Xd all = body::marker_positions(model, frames);
-      for (int k = 0; k < markers; ++k) model_markers.col(k) = all.col(data.markers[static_cast<std::size_t>(k)]);
+      for (int k = 0; k < markers; ++k)
+        model_markers.col(k) = all.col(data.markers[static_cast<std::size_t>(k)]);
     }
     double distance_sum = 0;
     int seen = 0;
     for (int k = 0; k < markers; ++k) {
-      const int p = mapping.point_of_marker[static_cast<std::size_t>(data.markers[static_cast<std::size_t>(k)])];
-      const bool visible = p < frame.positions.cols() && frame.visible(p) && frame.positions.col(p).allFinite();
+      const int p =
+          mapping.point_of_marker[static_cast<std::size_t>(data.markers[static_cast<std::size_t>(k)])];
+      const bool visible =
+          p < frame.positions.cols() && frame.visible(p) && frame.positions.col(p).allFinite();
       recorded.col(k) = visible ? Eigen::Vector3d(frame.positions.col(p)) : Eigen::Vector3d::Constant(nan);
       if (visible && model_markers.col(k).allFinite()) {
         distance_sum += (recorded.col(k) - model_markers.col(k)).norm();
@@ -200,7 +203,8 @@ inline PageData build_page_data(const body::BodyModel& model, const track::Marke
       if (io::is_tracked_row(true_values)) {
         const body::FrameTransforms frames = body::joint_frames(model, detail::pose_of(true_values));
         for (int p = 0; p < points; ++p)
-          truth_joints.col(p) = frames.origins[static_cast<std::size_t>(data.skeleton.frames[static_cast<std::size_t>(p)])];
+          truth_joints.col(p) =
+              frames.origins[static_cast<std::size_t>(data.skeleton.frames[static_cast<std::size_t>(p)])];
       }
       append_points(truth_joints, points);
     }

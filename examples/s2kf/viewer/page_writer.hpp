@@ -21,8 +21,10 @@ namespace s2kf::cli::viewer {
 /// would switch the HTML parser's script states; JSON and JavaScript strings read "<\/" and "<\!--"
 /// back unchanged.
 inline std::string script_safe(std::string text) {
-  for (std::size_t at = 0; (at = text.find("</", at)) != std::string::npos; at += 3) text.replace(at, 2, "<\\/");
-  for (std::size_t at = 0; (at = text.find("<!--", at)) != std::string::npos; at += 5) text.replace(at, 4, "<\\!--");
+  for (std::size_t at = 0; (at = text.find("</", at)) != std::string::npos; at += 3)
+    text.replace(at, 2, "<\\/");
+  for (std::size_t at = 0; (at = text.find("<!--", at)) != std::string::npos; at += 5)
+    text.replace(at, 4, "<\\!--");
   return text;
 }
 
@@ -30,18 +32,22 @@ inline std::string script_safe(std::string text) {
 inline std::string html_escaped(const std::string& text) {
   std::string out;
   for (const char c : text) {
-    if (c == '&') out += "&amp;";
-    else if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else out += c;
+    if (c == '&')
+      out += "&amp;";
+    else if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else
+      out += c;
   }
   return out;
 }
 
 /// The page's metadata (docs/viewer.md): how to read the data block, the skeleton, the joints with
 /// their limits, the markers shown and the tracking summary.
-inline nlohmann::json page_metadata(const PageData& data, const body::BodyModel& model, const std::string& name,
-                                    double rate_hz, const nlohmann::json& summary) {
+inline nlohmann::json page_metadata(const PageData& data, const body::BodyModel& model,
+                                    const std::string& name, double rate_hz, const nlohmann::json& summary) {
   nlohmann::json blocks = nlohmann::json::array();
   for (const DataBlock& block : data.blocks)
     blocks.push_back({{"name", block.name}, {"offset", block.offset}, {"count", block.count}});
@@ -94,7 +100,8 @@ inline std::string viewer_page(const PageData& data, const body::BodyModel& mode
   fill(page, "@S2KF:META@", script_safe(page_metadata(data, model, name, rate_hz, summary).dump()));
   fill(page, "@S2KF:IMPORTMAP@", import_map.dump());
   fill(page, "@S2KF:STYLE@", page_style());
-  fill(page, "@S2KF:LICENCE@", "three.js " + std::string(three_version()) + " (inlined below), " + three_licence_text());
+  fill(page, "@S2KF:LICENCE@",
+       "three.js " + std::string(three_version()) + " (inlined below), " + three_licence_text());
   fill(page, "@S2KF:TITLE@", html_escaped(name + " - s2kf viewer"));
   return page;
 }

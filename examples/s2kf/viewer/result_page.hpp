@@ -28,7 +28,9 @@ namespace s2kf::cli::viewer {
 inline nlohmann::json load_summary(const std::string& prefix) {
   const std::string path = prefix + ".json";
   std::ifstream in(path);
-  if (!in) throw UserError(path + ": no such file (give the prefix of an s2kf track result, e.g. results/handstand)");
+  if (!in)
+    throw UserError(path +
+                    ": no such file (give the prefix of an s2kf track result, e.g. results/handstand)");
   nlohmann::json summary;
   try {
     summary = nlohmann::json::parse(in);
@@ -91,7 +93,8 @@ inline std::string write_result_page(const std::string& prefix, const body::Body
   const std::string path = prefix + ".html";
   const std::string page =
       viewer_page(data, model, fs::path(input).stem().string(), summary["rate"].get<double>(), summary);
-  io::write_file_atomically(path, [&](std::ostream& out) { out << page; }, std::ios::out | std::ios::binary);
+  io::write_file_atomically(
+      path, [&](std::ostream& out) { out << page; }, std::ios::out | std::ios::binary);
   return path;
 }
 

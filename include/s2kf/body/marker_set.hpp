@@ -87,7 +87,6 @@ inline std::string marker_set_frame_name(const BodyModel& model, int frame) {
   return model.frame_index(group) == frame ? group : model.frame_name(frame);
 }
 
-
 /// Throws std::invalid_argument for a set that cannot be applied to `base`: no entries, an empty
 /// label, a label (or alias) used twice (case-insensitive), an unknown frame, segment or `like`
 /// marker, a non-finite offset, a noise that is not positive, a negative weight.

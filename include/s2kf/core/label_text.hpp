@@ -41,7 +41,8 @@ inline bool same_name_ignoring_case(std::string_view a, std::string_view b) {
 /// The label without a subject prefix ("Subject:LASI" -> "LASI") and surrounding blanks.
 inline std::string strip_subject_prefix(const std::string& label) {
   const auto colon = label.rfind(':');
-  return trim(colon == std::string::npos ? std::string_view(label) : std::string_view(label).substr(colon + 1));
+  return trim(colon == std::string::npos ? std::string_view(label)
+                                         : std::string_view(label).substr(colon + 1));
 }
 
 }  // namespace s2kf

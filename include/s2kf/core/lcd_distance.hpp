@@ -5,7 +5,6 @@
 #pragma once
 
 #include <s2kf/core/constants.hpp>
-
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/exponential_integral.hpp>
 

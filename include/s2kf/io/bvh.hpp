@@ -3,9 +3,8 @@
 /// MotionBuilder and most animation tools open.
 #pragma once
 
-#include <s2kf/core/constants.hpp>
-
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/motion_files.hpp>
 
@@ -37,10 +36,10 @@ inline double bvh_millimetres_per_unit(BvhUnits units) { return units == BvhUnit
 /// BVH is Y-up and these files are in metres (or centimetres, BvhUnits): a model point (x right,
 /// y forward, z up, mm) becomes (x, z, -y) / 1000 (or / 10). Joints are the anatomical groups
 /// (BP, BT, BLN, BUN, LS, LE, LW, RS, ..., RA) under the root "pelvis"; all channels 0 is the model's
-/// zero pose, so the rest pose Blender shows is that pose. The same change of basis turns a rotation about the model's x, z, y axes
-/// into one about BVH's X, Y, -Z, so every joint group keeps its x-z-y order as channels
-/// "Xrotation Yrotation Zrotation" with values (qx, qz, -qy) in degrees. The root's
-/// Rz(yaw) Ry(pitch) Rx(roll) becomes "Yrotation Zrotation Xrotation" = (yaw, -pitch, roll).
+/// zero pose, so the rest pose Blender shows is that pose. The same change of basis turns a rotation about
+/// the model's x, z, y axes into one about BVH's X, Y, -Z, so every joint group keeps its x-z-y order as
+/// channels "Xrotation Yrotation Zrotation" with values (qx, qz, -qy) in degrees. The root's Rz(yaw)
+/// Ry(pitch) Rx(roll) becomes "Yrotation Zrotation Xrotation" = (yaw, -pitch, roll).
 class BvhSkeleton {
  public:
   explicit BvhSkeleton(const body::BodyModel& model, BvhUnits units = BvhUnits::metres)

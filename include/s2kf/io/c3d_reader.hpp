@@ -122,7 +122,8 @@ struct Recording : MarkerSequence {
 /// outputs (angles, forces, ... that Vicon stores as points) as empty strings, which match nothing.
 inline std::vector<std::string> marker_labels(const C3dInfo& info) {
   std::vector<std::string> labels;
-  for (const PointLabel& label : info.labels) labels.push_back(label.model_output ? std::string() : label.name);
+  for (const PointLabel& label : info.labels)
+    labels.push_back(label.model_output ? std::string() : label.name);
   return labels;
 }
 
@@ -547,8 +548,8 @@ class C3dReader {
         const std::int64_t count = elements / length;
         parameter.strings.reserve(static_cast<std::size_t>(count));
         for (std::int64_t i = 0; i < count; ++i)
-          parameter.strings.push_back(trim(std::string_view(
-              reinterpret_cast<const char*>(data + i * length), static_cast<std::size_t>(length))));
+          parameter.strings.push_back(trim(std::string_view(reinterpret_cast<const char*>(data + i * length),
+                                                            static_cast<std::size_t>(length))));
         return;
       }
       case 1:

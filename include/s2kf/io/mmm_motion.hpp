@@ -24,8 +24,11 @@ inline std::string mmm_joint_name(const std::string& joint) { return joint + "_j
 /// opening tags.
 inline void write_mmm_header(std::ostream& out, const std::string& motion_name, double height_mm) {
   std::string escaped;
-  for (const char c : motion_name) escaped += c == '"' ? std::string("&quot;") : c == '&' ? std::string("&amp;")
-                                            : c == '<' ? std::string("&lt;") : std::string(1, c);
+  for (const char c : motion_name)
+    escaped += c == '"'   ? std::string("&quot;")
+               : c == '&' ? std::string("&amp;")
+               : c == '<' ? std::string("&lt;")
+                          : std::string(1, c);
   out << std::setprecision(9) << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       << "<MMM version=\"2.0\">\n"
       << "  <Motion name=\"" << escaped << "\">\n"
@@ -43,8 +46,10 @@ inline void write_mmm_header(std::ostream& out, const std::string& motion_name, 
 /// One ModelPose measurement: root position (mm) and roll, pitch, yaw (rad, R = Rz Ry Rx).
 inline void write_mmm_model_pose(std::ostream& out, double time_s, const MotionRowRef& values) {
   out << std::setprecision(9) << "          <Measurement timestep=\"" << time_s << "\">\n"
-      << "            <RootPosition>" << values(0) << " " << values(1) << " " << values(2) << "</RootPosition>\n"
-      << "            <RootRotation>" << values(3) << " " << values(4) << " " << values(5) << "</RootRotation>\n"
+      << "            <RootPosition>" << values(0) << " " << values(1) << " " << values(2)
+      << "</RootPosition>\n"
+      << "            <RootRotation>" << values(3) << " " << values(4) << " " << values(5)
+      << "</RootRotation>\n"
       << "          </Measurement>\n";
 }
 
@@ -54,7 +59,8 @@ inline void write_mmm_kinematic_header(std::ostream& out, const std::vector<std:
       << "      </Sensor>\n"
       << "      <Sensor type=\"Kinematic\" version=\"1.0\">\n"
       << "        <Configuration>\n";
-  for (const std::string& joint : joint_names) out << "          <Joint name=\"" << mmm_joint_name(joint) << "\" />\n";
+  for (const std::string& joint : joint_names)
+    out << "          <Joint name=\"" << mmm_joint_name(joint) << "\" />\n";
   out << "        </Configuration>\n"
       << "        <Data>\n";
 }
@@ -83,13 +89,15 @@ inline void write_mmm_motion(std::ostream& out, const MotionTable& motion, const
   write_mmm_kinematic_header(out, motion.joint_names);
   for (Eigen::Index r = 0; r < motion.frames(); ++r)
     if (is_tracked_row(motion.values.row(r).transpose()))
-      write_mmm_joint_position(out, motion.time[static_cast<std::size_t>(r)], motion.values.row(r).transpose());
+      write_mmm_joint_position(out, motion.time[static_cast<std::size_t>(r)],
+                               motion.values.row(r).transpose());
   write_mmm_footer(out);
 }
 
-inline void save_mmm_motion(const std::string& path, const MotionTable& motion, const std::string& motion_name,
-                            double height_mm) {
-  write_file_atomically(path, [&](std::ostream& out) { write_mmm_motion(out, motion, motion_name, height_mm); });
+inline void save_mmm_motion(const std::string& path, const MotionTable& motion,
+                            const std::string& motion_name, double height_mm) {
+  write_file_atomically(path,
+                        [&](std::ostream& out) { write_mmm_motion(out, motion, motion_name, height_mm); });
 }
 
 }  // namespace s2kf::io

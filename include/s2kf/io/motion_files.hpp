@@ -3,9 +3,8 @@
 /// project's own column layout, also used for ground truth) and as an OpenSim motion file (.mot).
 #pragma once
 
-#include <s2kf/core/constants.hpp>
-
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
 
 #include <Eigen/Core>

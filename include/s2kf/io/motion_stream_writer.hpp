@@ -1,6 +1,6 @@
 /// @file
-/// Writing a motion's CSV, OpenSim .mot, BVH, MMM and velocity/acceleration files frame by frame, with memory that does not
-/// grow with the recording: what `s2kf track` uses for recordings of any length.
+/// Writing a motion's CSV, OpenSim .mot, BVH, MMM and velocity/acceleration files frame by frame, with memory
+/// that does not grow with the recording: what `s2kf track` uses for recordings of any length.
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
@@ -27,10 +27,10 @@ namespace s2kf::io {
 
 /// Where MotionStreamWriter writes; an empty path leaves that format out.
 struct MotionFilePaths {
-  std::string csv;  ///< write_motion_csv's format
-  std::string mot;  ///< write_opensim_mot's format
-  std::string bvh;  ///< write_bvh's format
-  std::string mmm;  ///< write_mmm_motion's format
+  std::string csv;               ///< write_motion_csv's format
+  std::string mot;               ///< write_opensim_mot's format
+  std::string bvh;               ///< write_bvh's format
+  std::string mmm;               ///< write_mmm_motion's format
   std::string velocity_csv;      ///< motion_derivatives' velocities in write_motion_csv's format
   std::string acceleration_csv;  ///< and its accelerations
 };
@@ -42,9 +42,9 @@ struct MotionFilePaths {
 ///
 /// The CSV goes straight to `csv + ".tmp"`. The .mot header counts the tracked rows and the BVH
 /// header all frames, so their lines go to `path + ".body.tmp"` first and finish() writes header and
-/// lines to `path + ".tmp"` (the MMM file's two sensors likewise). Untracked rows (a non-finite value) are left out of the .mot and repeat
-/// the last tracked pose in the BVH; untracked rows before the first tracked one are only counted
-/// and take the first tracked pose when it arrives (the rest pose if none ever does).
+/// lines to `path + ".tmp"` (the MMM file's two sensors likewise). Untracked rows (a non-finite value) are
+/// left out of the .mot and repeat the last tracked pose in the BVH; untracked rows before the first tracked
+/// one are only counted and take the first tracked pose when it arrives (the rest pose if none ever does).
 ///
 /// Nothing appears under the target names until finish() has written all files; they are
 /// then renamed one after another. A writer destroyed without finish() (an exception, a failed run)

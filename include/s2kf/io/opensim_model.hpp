@@ -147,11 +147,20 @@ inline void write_offset_frame(std::ostream& out, const std::string& name, const
 inline std::string xml_escaped(const std::string& text) {
   std::string escaped;
   for (const char c : text) switch (c) {
-      case '&': escaped += "&amp;"; break;
-      case '<': escaped += "&lt;"; break;
-      case '>': escaped += "&gt;"; break;
-      case '"': escaped += "&quot;"; break;
-      default: escaped += c;
+      case '&':
+        escaped += "&amp;";
+        break;
+      case '<':
+        escaped += "&lt;";
+        break;
+      case '>':
+        escaped += "&gt;";
+        break;
+      case '"':
+        escaped += "&quot;";
+        break;
+      default:
+        escaped += c;
     }
   return escaped;
 }
@@ -180,7 +189,8 @@ inline void write_opensim_model(std::ostream& out, const body::BodyModel& model,
   const std::vector<detail::OsimBody> bodies = detail::osim_bodies(model);
   std::vector<int> body_of_frame(model.frame_count(), -1);
   body_of_frame[0] = 0;
-  for (std::size_t b = 1; b < bodies.size(); ++b) body_of_frame[bodies[b].last_joint + 1] = static_cast<int>(b);
+  for (std::size_t b = 1; b < bodies.size(); ++b)
+    body_of_frame[bodies[b].last_joint + 1] = static_cast<int>(b);
   for (const std::string& marker : marker_names)
     if (model.marker_index(marker) < 0)
       throw std::invalid_argument("OpenSim model: no marker " + marker + " in the body model");
@@ -188,8 +198,9 @@ inline void write_opensim_model(std::ostream& out, const body::BodyModel& model,
   // Standing on the floor by default: the lowest marker of the zero pose at z = 0.
   double standing_root_z_m = 0;
   if (model.marker_count() > 0) {
-    const Eigen::Matrix3Xd zero_pose = body::marker_positions(
-        model, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::VectorXd::Zero(model.joint_count()));
+    const Eigen::Matrix3Xd zero_pose =
+        body::marker_positions(model, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(),
+                               Eigen::VectorXd::Zero(model.joint_count()));
     standing_root_z_m = -zero_pose.row(2).minCoeff() / 1000.0;
   }
   const double pi = 3.14159265358979323846;
@@ -213,8 +224,8 @@ inline void write_opensim_model(std::ostream& out, const body::BodyModel& model,
     out << p8 << "<Body name=\"" << body.name << "\">\n"
         << p10 << "<mass>" << kOpenSimPlaceholderMassKg << "</mass>\n"
         << p10 << "<mass_center>0 0 0</mass_center>\n"
-        << p10 << "<inertia>" << kOpenSimPlaceholderInertiaKgM2 << " " << kOpenSimPlaceholderInertiaKgM2 << " "
-        << kOpenSimPlaceholderInertiaKgM2 << " 0 0 0</inertia>\n"
+        << p10 << "<inertia>" << kOpenSimPlaceholderInertiaKgM2 << " " << kOpenSimPlaceholderInertiaKgM2
+        << " " << kOpenSimPlaceholderInertiaKgM2 << " 0 0 0</inertia>\n"
         << p8 << "</Body>\n";
   out << "      </objects>\n    </BodySet>\n"
       << "    <JointSet name=\"jointset\">\n      <objects>\n";
@@ -241,8 +252,8 @@ inline void write_opensim_model(std::ostream& out, const body::BodyModel& model,
   detail::write_transform_axis(out, "rotation2", "root_pitch", Eigen::Vector3d::UnitY(), p12);
   detail::write_transform_axis(out, "rotation3", "root_roll", Eigen::Vector3d::UnitX(), p12);
   for (int k = 0; k < 3; ++k)
-    detail::write_transform_axis(out, "translation" + std::to_string(k + 1), std::string("root_") + root_axes[k],
-                                 Eigen::Vector3d::Unit(k), p12);
+    detail::write_transform_axis(out, "translation" + std::to_string(k + 1),
+                                 std::string("root_") + root_axes[k], Eigen::Vector3d::Unit(k), p12);
   out << p10 << "</SpatialTransform>\n" << p8 << "</CustomJoint>\n";
 
   for (std::size_t b = 1; b < bodies.size(); ++b) {
@@ -259,7 +270,8 @@ inline void write_opensim_model(std::ostream& out, const body::BodyModel& model,
     }
     out << p10 << "</coordinates>\n" << p10 << "<frames>\n";
     detail::write_offset_frame(out, parent + "_offset", "/bodyset/" + parent,
-                               model.joints[body.first_joint].translation / 1000.0, Eigen::Vector3d::Zero(), p12);
+                               model.joints[body.first_joint].translation / 1000.0, Eigen::Vector3d::Zero(),
+                               p12);
     detail::write_offset_frame(out, body.name + "_offset", "/bodyset/" + body.name, Eigen::Vector3d::Zero(),
                                Eigen::Vector3d::Zero(), p12);
     out << p10 << "</frames>\n" << p10 << "<SpatialTransform>\n";
@@ -273,10 +285,12 @@ inline void write_opensim_model(std::ostream& out, const body::BodyModel& model,
                                    Eigen::Vector3d::Unit(static_cast<int>(model.joints[j].axis)), p12);
     }
     for (int k = 0; k < 3; ++k)
-      if (!axis_used[k]) detail::write_transform_axis(out, "rotation" + std::to_string(slot++), "",
-                                                      Eigen::Vector3d::Unit(k), p12);
+      if (!axis_used[k])
+        detail::write_transform_axis(out, "rotation" + std::to_string(slot++), "", Eigen::Vector3d::Unit(k),
+                                     p12);
     for (int k = 0; k < 3; ++k)
-      detail::write_transform_axis(out, "translation" + std::to_string(k + 1), "", Eigen::Vector3d::Unit(k), p12);
+      detail::write_transform_axis(out, "translation" + std::to_string(k + 1), "", Eigen::Vector3d::Unit(k),
+                                   p12);
     out << p10 << "</SpatialTransform>\n" << p8 << "</CustomJoint>\n";
   }
   out << "      </objects>\n    </JointSet>\n"
@@ -297,7 +311,8 @@ inline void write_opensim_model(std::ostream& out, const body::BodyModel& model,
 
 inline void save_opensim_model(const std::string& path, const body::BodyModel& model, const std::string& name,
                                const std::vector<std::string>& marker_names = {}) {
-  write_file_atomically(path, [&](std::ostream& out) { write_opensim_model(out, model, name, marker_names); });
+  write_file_atomically(path,
+                        [&](std::ostream& out) { write_opensim_model(out, model, name, marker_names); });
 }
 
 }  // namespace s2kf::io

@@ -24,7 +24,8 @@ inline void write_trc_header(std::ostream& out, const std::string& file_name, do
                              const std::vector<std::string>& marker_names) {
   if (!(rate_hz > 0)) throw std::invalid_argument("write_trc_header: the frame rate must be positive");
   out << "PathFileType\t4\t(X/Y/Z)\t" << file_name << "\n"
-      << "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n"
+      << "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames"
+         "\n"
       << std::setprecision(9) << rate_hz << "\t" << rate_hz << "\t" << frames << "\t" << marker_names.size()
       << "\tmm\t" << rate_hz << "\t1\t" << frames << "\n"
       << "Frame#\tTime";

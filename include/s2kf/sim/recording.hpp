@@ -3,8 +3,8 @@
 /// markers, with the true pose of every frame kept beside the measurements.
 #pragma once
 
-#include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/sim/keyframe_motion.hpp>
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/random.hpp>

@@ -4,7 +4,6 @@
 #pragma once
 
 #include <s2kf/core/constants.hpp>
-
 #include <s2kf/sim/random.hpp>
 
 #include <Eigen/Core>
@@ -39,8 +38,7 @@ struct SoftTissue {
              ((angles(j) - 0.5 * (upper(j) + lower(j))) / half_range);
     }
     for (int c = 0; c < 3; ++c)
-      s(c) += drift_amplitude(c) *
-              std::sin(2.0 * kPi * drift_frequency(c) * time_s + drift_phase(c));
+      s(c) += drift_amplitude(c) * std::sin(2.0 * kPi * drift_frequency(c) * time_s + drift_phase(c));
     return s;
   }
 };

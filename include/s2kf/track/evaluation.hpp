@@ -15,11 +15,11 @@
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/session.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
 #include <Eigen/Core>
@@ -159,8 +159,8 @@ inline MethodResult summarise(Method method, int samples, TrackingRun run, const
 
 /// Tracks the recording with one method and summarises it; `truth` (optional) must have a row
 /// per frame of the recording with the model's joint columns.
-inline MethodResult evaluate_method(const Session& setup, const MarkerSequence& recording,
-                                    Method method, int samples, const io::MotionTable* truth, long warmup,
+inline MethodResult evaluate_method(const Session& setup, const MarkerSequence& recording, Method method,
+                                    int samples, const io::MotionTable* truth, long warmup,
                                     const std::function<void(long)>& on_frame = {}) {
   TrackingRun run = track_recording(setup, recording, recording, method, samples, nullptr, on_frame);
   return summarise(method, samples, std::move(run), setup, truth, warmup);

@@ -74,7 +74,8 @@ struct HeightEstimate {
 /// The body height from up to `max_frames` frames spread evenly through the source; nothing when
 /// the mapped markers form no rigid pair.
 inline std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
-                                                     const MarkerMapping& mapping, std::int64_t max_frames = 200) {
+                                                     const MarkerMapping& mapping,
+                                                     std::int64_t max_frames = 200) {
   HeightEstimator estimator(model, mapping);
   const std::int64_t frames = source.frame_count();
   const std::int64_t step = std::max<std::int64_t>(1, frames / max_frames);

@@ -53,8 +53,8 @@ struct SessionOptions {
   /// When no height can be estimated (no two markers on one segment): this height with a warning,
   /// or 0 to refuse the recording.
   double fallback_height_mm = 1750;
-  bool calibrate = true;                    ///< fit the subject's offsets and bone lengths first
-  std::int64_t calibration_frames = 1200;   ///< frames from the start the calibration uses
+  bool calibrate = true;                   ///< fit the subject's offsets and bone lengths first
+  std::int64_t calibration_frames = 1200;  ///< frames from the start the calibration uses
   CalibrationOptions calibration = [] {
     CalibrationOptions options;
     options.final_pass = false;  // the run's own first frames give the calibrated distance
@@ -68,15 +68,16 @@ struct SessionOptions {
 /// What a recording is tracked with, ready to run.
 struct Session {
   body::MarkerSet marker_set;
-  body::BodyModel model;  ///< the set applied, scaled to the subject, calibrated when asked
-  MarkerMapping mapping;  ///< recording points -> model markers
+  body::BodyModel model;   ///< the set applied, scaled to the subject, calibrated when asked
+  MarkerMapping mapping;   ///< recording points -> model markers
   TrackerOptions tracker;  ///< with the set's per-marker noise
   double rate_hz = 0;
   double height_mm = 0;
-  std::string height_source;  ///< "given", "from the marker-set file", "estimated from N rigid marker pairs", ...
+  std::string
+      height_source;  ///< "given", "from the marker-set file", "estimated from N rigid marker pairs", ...
   std::optional<SubjectCalibration> calibration;  ///< when calibrated
-  std::int64_t calibration_frames = 0;             ///< frames the calibration used
-  std::vector<std::string> warnings;               ///< the marker set's and the preparation's
+  std::int64_t calibration_frames = 0;            ///< frames the calibration used
+  std::vector<std::string> warnings;              ///< the marker set's and the preparation's
 
   int markers_used() const { return mapping.markers_used(); }
 };
@@ -125,14 +126,14 @@ inline Session prepare_session(FrameSource& source, const body::MarkerSet& set, 
   session.tracker.marker_noise_mm_per_marker = marker_noise_of(set);
   const int used = session.mapping.markers_used();
   if (used == 0)
-    throw std::invalid_argument("none of its " + std::to_string(source.labels().size()) +
-                                " point labels is a marker of the marker set " + set.name +
-                                " (expected names such as " +
-                                (set.entries.empty() ? std::string("none") : set.entries.front().label) + ")");
+    throw std::invalid_argument(
+        "none of its " + std::to_string(source.labels().size()) +
+        " point labels is a marker of the marker set " + set.name + " (expected names such as " +
+        (set.entries.empty() ? std::string("none") : set.entries.front().label) + ")");
   if (used < session.tracker.min_markers_to_start)
-    throw std::invalid_argument("only " + std::to_string(used) + " of its labels are markers of the marker set " +
-                                set.name + "; at least " +
-                                std::to_string(session.tracker.min_markers_to_start) + " are needed to track");
+    throw std::invalid_argument(
+        "only " + std::to_string(used) + " of its labels are markers of the marker set " + set.name +
+        "; at least " + std::to_string(session.tracker.min_markers_to_start) + " are needed to track");
 
   if (options.height_mm > 0) {
     session.height_mm = options.height_mm;
@@ -168,7 +169,8 @@ inline Session prepare_session(FrameSource& source, const body::MarkerSet& set, 
           calibrate_subject(session.model, session.mapping, session.tracker, frames, samples, calibration);
       session.model = session.calibration->model;
     } catch (const std::invalid_argument& e) {
-      if (!options.calibration_may_fail) throw std::invalid_argument(std::string("calibration failed: ") + e.what());
+      if (!options.calibration_may_fail)
+        throw std::invalid_argument(std::string("calibration failed: ") + e.what());
       session.calibration.reset();
       session.calibration_frames = 0;
       session.warnings.push_back(std::string("subject not calibrated (calibration failed: ") + e.what() +
@@ -215,8 +217,9 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
     for (Eigen::Index p = 0; p < frame.positions.cols(); ++p)
       if (frame.visible(p) && frame.positions.col(p).cwiseAbs().maxCoeff() > kAbsurdCoordinateMm) {
         std::ostringstream s;
-        s << "frame " << frame.index << ", point " << source.labels()[static_cast<std::size_t>(p)] << " is at ("
-          << frame.positions.col(p).transpose() << ") mm, beyond a kilometre: the file's units or scale are wrong";
+        s << "frame " << frame.index << ", point " << source.labels()[static_cast<std::size_t>(p)]
+          << " is at (" << frame.positions.col(p).transpose()
+          << ") mm, beyond a kilometre: the file's units or scale are wrong";
         throw std::invalid_argument(s.str());
       }
     if (hooks.on_read) hooks.on_read(frame);
@@ -237,8 +240,8 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
     smoother.record(tracker, index);
     if (hooks.on_frame) hooks.on_frame(index);
   };
-  TrackingRun run =
-      run_tracking(tracker, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers, on_frame);
+  TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
+                                 options.keep_predicted_markers, on_frame);
   smoother.smooth(run.motion);
   if (hooks.sink)
     for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {
@@ -256,7 +259,8 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
 inline double calibrated_distance_mm(const Session& session, const TrackingRun& run) {
   if (!session.calibration) return std::numeric_limits<double>::quiet_NaN();
   const auto& distance = run.mean_marker_distance;
-  const std::size_t end = std::min<std::size_t>(distance.size(), static_cast<std::size_t>(session.calibration_frames));
+  const std::size_t end =
+      std::min<std::size_t>(distance.size(), static_cast<std::size_t>(session.calibration_frames));
   std::size_t first = 0;
   while (first < end && !std::isfinite(distance[first])) ++first;
   const std::size_t from =

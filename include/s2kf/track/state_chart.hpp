@@ -59,7 +59,9 @@ inline void to_previous_chart(const Eigen::Matrix3d& previous, const Eigen::Matr
   mean.segment<3>(3) = body::rotation_log(d * body::rotation_exp(mean.segment<3>(3)));
   for (Eigen::Index k = kFirstJointState; k < mean.size(); ++k) {
     const double reference = previous_mean(k);
-    const auto nearest = [&](double value) { return value + 2 * kPi * std::round((reference - value) / (2 * kPi)); };
+    const auto nearest = [&](double value) {
+      return value + 2 * kPi * std::round((reference - value) / (2 * kPi));
+    };
     const double direct = nearest(mean(k)), reflected = nearest(kPi - mean(k));
     if (std::abs(reflected - reference) < std::abs(direct - reference)) {
       mean(k) = reflected;

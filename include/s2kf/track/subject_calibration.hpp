@@ -10,8 +10,8 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
-#include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/io/marker_sequence.hpp>
+#include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
@@ -159,8 +159,7 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const M
 class BundleAdjustment {
  public:
   BundleAdjustment(const body::BodyModel& start, const MarkerMapping& mapping,
-                   const MarkerSequence& recording, const CalibrationOptions& options,
-                   double noise_variance)
+                   const MarkerSequence& recording, const CalibrationOptions& options, double noise_variance)
       : start_(start), mapping_(mapping), recording_(recording), options_(options) {
     segments_ = options.estimate_segment_scales ? scalable_segments(start) : std::vector<std::string>{};
     cumulative_.assign(segments_.size(), 1.0);
@@ -472,9 +471,8 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
     const bool last = round == options.iterations;
     if (last && !options.final_pass) break;
     CalibrationPass pass;
-    std::vector<detail::BundleFrame> frames =
-        detail::track_pass(result.model, mapping, tracker_options, recording, samples, options,
-                           pass.mean_marker_distance_mm);
+    std::vector<detail::BundleFrame> frames = detail::track_pass(
+        result.model, mapping, tracker_options, recording, samples, options, pass.mean_marker_distance_mm);
     if (last) {
       result.passes.push_back(pass);
       break;
@@ -492,7 +490,8 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
       for (std::size_t u = 0; u < used.size(); ++u) {
         const int point = mapping.point_of_marker[static_cast<std::size_t>(used[u])];
         const auto points = recording.frame(frame.index);
-        if (point >= points.cols() || !recording.visible(point, frame.index) || !points.col(point).allFinite())
+        if (point >= points.cols() || !recording.visible(point, frame.index) ||
+            !points.col(point).allFinite())
           continue;
         distances[k][u] = (points.col(point) - predicted.col(used[u])).norm();
         all.push_back(distances[k][u]);

@@ -3,13 +3,12 @@
 /// model and reports the pose per frame. No file I/O; frame by frame, for live systems too.
 #pragma once
 
-#include <s2kf/core/constants.hpp>
-
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/bounded_joints.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/constants.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 #include <s2kf/track/marker_mapping.hpp>
@@ -165,7 +164,8 @@ class Tracker {
  private:
   static TrackerOptions validated(TrackerOptions options, double rate_hz) {
     options.validate();
-    if (!(rate_hz > 0) || !std::isfinite(rate_hz)) throw std::invalid_argument("the frame rate must be positive");
+    if (!(rate_hz > 0) || !std::isfinite(rate_hz))
+      throw std::invalid_argument("the frame rate must be positive");
     return options;
   }
 

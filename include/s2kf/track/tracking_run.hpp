@@ -33,10 +33,10 @@ struct TrackingRun {
 /// One frame as run_tracking produces it, handed to a frame sink before on_frame is called. The
 /// references are valid during the call only.
 struct TrackedFrame {
-  long index = 0;                 ///< 0-based position in the run
-  long frame = 0;                 ///< frame number in the recording
-  double time = 0;                ///< seconds: frame / rate
-  const Eigen::VectorXd& values;  ///< the motion row: 6 + joints values, NaN where not tracked
+  long index = 0;                   ///< 0-based position in the run
+  long frame = 0;                   ///< frame number in the recording
+  double time = 0;                  ///< seconds: frame / rate
+  const Eigen::VectorXd& values;    ///< the motion row: 6 + joints values, NaN where not tracked
   double mean_marker_distance = 0;  ///< mm, NaN where nothing was measured
   int visible_markers = 0;          ///< mapped markers observed
   /// The tracker's whole report; null for rows replayed after smoothing.

@@ -4,10 +4,9 @@
 /// on the bounded joint parameters Theta, like the filter, so every joint stays within its limits.
 #pragma once
 
-#include <s2kf/core/constants.hpp>
-
 #include <s2kf/body/bounded_joints.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/constants.hpp>
 #include <s2kf/core/rts_smoother.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/track/state_chart.hpp>

@@ -1,13 +1,13 @@
 /// @file
-/// Accuracy of an estimated motion against ground truth (docs/results.md defines the metrics): segment-orientation
-/// error, limb flexion error, all-joint error and worst joint, root errors, joint-limit violations.
+/// Accuracy of an estimated motion against ground truth (docs/results.md defines the metrics):
+/// segment-orientation error, limb flexion error, all-joint error and worst joint, root errors, joint-limit
+/// violations.
 #pragma once
-
-#include <s2kf/core/constants.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/constants.hpp>
 #include <s2kf/io/motion_files.hpp>
 
 #include <Eigen/Geometry>
