@@ -4,6 +4,7 @@
 #include "extra_outputs.hpp"
 #include "frame_figure.hpp"
 #include "marker_set_json.hpp"
+#include "track_summary.hpp"
 #include "tracker_samples.hpp"
 #include "viewer/result_page.hpp"  // --html
 
@@ -101,10 +102,6 @@ nlohmann::json truth_json(const track::TruthComparison& accuracy) {
           {"worst_joint", accuracy.worst_joint},
           {"worst_joint_rms_deg", accuracy.worst_joint_rms_deg},
           {"joint_limit_violations", accuracy.joint_limit_violations}};
-}
-
-nlohmann::json number_or_null(double value) {
-  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
 }
 
 /// Tracks one recording through the library's pipeline (prepare a session, run it) into the
@@ -242,22 +239,6 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       warnings.push_back(problem);
   }
 
-  const long converged = track::converged_frame(run.mean_marker_distance);
-  const double level = track::mean_from(run.mean_marker_distance, converged);
-  // The convergence rule restarts at any late frame above 1.5 times the final level, so on long
-  // real recordings the mean over every tracked frame is reported as well.
-  const double overall = track::mean_from(run.mean_marker_distance, 0);
-  nlohmann::json calibration_summary = nullptr;
-  if (session.calibration)
-    calibration_summary = {
-        {"frames", session.calibration_frames},
-        {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
-        {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
-        {"segment_scale", session.calibration->segment_scale}};
-  std::vector<double>& latency_ms = run.seconds;  // not needed in seconds any more
-  for (double& s : latency_ms) s *= 1000;
-  const double median_ms = track::quantile(latency_ms, 0.5), p99_ms = track::quantile(latency_ms, 0.99);
-
   motion_files.finish();
   marker_report.commit();
   // Accuracy against the truth, from the motion as written (frames from the 20th on).
@@ -270,43 +251,24 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       throw UserError("--truth: " + settings.truth + ": " + e.what());
     }
   }
-  std::vector<std::string> markers_used;
-  for (int m = 0; m < session.model.marker_count(); ++m)
-    if (session.mapping.point_of_marker[m] >= 0) markers_used.push_back(session.model.markers[m].name);
-  const bool s2kf_method = run_options.method == track::Method::s2kf;
-  nlohmann::json summary = {
-      {"input", input},
-      {"method", settings.method},
-      {"marker_set", choice.set.name},
-      {"marker_set_source", choice.source},
-      {"marker_set_messages", messages},
-      {"calibration", calibration_summary},
-      {"smoothed", settings.smooth},
-      {"preset", session.tracker.preset},
-      {"frames", run.frames},
-      {"frames_tracked", run.frames_tracked},
-      {"rate", info.rate},
-      {"height_mm", session.height_mm},
-      {"height_source", session.height_source},
-      {"markers_used", markers_used},
-      {"labels_ignored", session.mapping.ignored_labels},
-      {"mean_marker_distance_mm", number_or_null(level)},
-      {"converged_frame", converged},
-      {"mean_marker_distance_all_frames_mm", number_or_null(overall)},
-      {"latency_ms", {{"median", median_ms}, {"p99", p99_ms}}},
-      {"samples", s2kf_method ? nlohmann::json(session.tracker.samples) : nlohmann::json(nullptr)},
-      {"warnings", warnings},
-  };
+  nlohmann::json summary =
+      track_summary(input, settings.method, choice, messages, session, run, settings.smooth, warnings);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
   if (accuracy) summary["truth"] = truth_json(*accuracy);
   io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
   if (settings.html)
     viewer::write_result_page(prefix, session.model, session.mapping, settings.truth);  // --html
 
+  const long converged = summary["converged_frame"].get<long>();
+  const double level = summary_number(summary["mean_marker_distance_mm"]);
+  const double overall = summary_number(summary["mean_marker_distance_all_frames_mm"]);
+  const double median_ms = summary["latency_ms"]["median"].get<double>();
+  const double p99_ms = summary["latency_ms"]["p99"].get<double>();
+  const nlohmann::json& calibration_summary = summary["calibration"];
   std::ostringstream paragraph;
   for (const std::string& message : messages) paragraph << message << "\n";
   paragraph << name << ": tracked " << run.frames_tracked << " of " << run.frames << " frames at "
-            << format(info.rate, 0) << " Hz with " << markers_used.size() << " markers ("
+            << format(info.rate, 0) << " Hz with " << summary["markers_used"].size() << " markers ("
             << session.mapping.ignored_labels.size() << " labels ignored), body height "
             << format(session.height_mm, 0) << " mm (" << session.height_source << "), marker set "
             << choice.set.name;
@@ -326,7 +288,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
               << format(overall, 1) << " mm over all tracked frames";
   paragraph << ". Latency per frame: median " << format(median_ms, 3) << " ms, p99 " << format(p99_ms, 3)
             << " ms";
-  if (s2kf_method) paragraph << " (" << session.tracker.samples << " samples)";
+  if (settings.method == "s2kf") paragraph << " (" << session.tracker.samples << " samples)";
   paragraph << ".";
   if (settings.smooth) paragraph << " Motion smoothed (RTS); marker distances are the filter's.";
   if (settings.realtime) paragraph << " Real-time pacing: " << deadline_misses << " deadline misses.";

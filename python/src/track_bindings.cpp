@@ -8,6 +8,7 @@
 #include "streaming_tracker.hpp"
 
 #include "marker_set_json.hpp"  // examples/s2kf: bundled marker sets, the automatic choice, messages
+#include "track_summary.hpp"    // examples/s2kf: the summary `s2kf track` writes
 
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/io/atomic_file.hpp>
@@ -96,10 +97,6 @@ struct TrackResult {
   throw py::error_already_set();
 }
 
-nlohmann::json number_or_null(double value) {
-  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
-
 /// The pipeline of `s2kf track` (examples/s2kf/command_track.cpp, track_file) without its files:
 /// marker-set choice, session, run, summary. `input` names the recording in messages and the
 /// summary; `raw_labels` (empty, or one per point) give model outputs their names in the ignored
@@ -168,47 +165,9 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
                          " visible markers needed to start tracking");
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
 
-  // The summary, field for field as `s2kf track` writes PREFIX.json.
-  const long converged = track::converged_frame(run.mean_marker_distance);
-  const double level = track::mean_from(run.mean_marker_distance, converged);
-  const double overall = track::mean_from(run.mean_marker_distance, 0);
-  nlohmann::json calibration_summary = nullptr;
-  if (session.calibration)
-    calibration_summary = {
-        {"frames", session.calibration_frames},
-        {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
-        {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
-        {"segment_scale", session.calibration->segment_scale}};
-  std::vector<double> latency_ms = run.seconds;
-  for (double& s : latency_ms) s *= 1000;
-  std::vector<std::string> markers_used;
-  for (int m = 0; m < session.model.marker_count(); ++m)
-    if (session.mapping.point_of_marker[m] >= 0) markers_used.push_back(session.model.markers[m].name);
-  const bool s2kf_method = run_options.method == track::Method::s2kf;
-  result->summary = {
-      {"input", input},
-      {"method", settings.method},
-      {"marker_set", choice.set.name},
-      {"marker_set_source", choice.source},
-      {"marker_set_messages", result->messages},
-      {"calibration", calibration_summary},
-      {"smoothed", settings.smooth},
-      {"preset", session.tracker.preset},
-      {"frames", run.frames},
-      {"frames_tracked", run.frames_tracked},
-      {"rate", source.rate_hz()},
-      {"height_mm", session.height_mm},
-      {"height_source", session.height_source},
-      {"markers_used", markers_used},
-      {"labels_ignored", session.mapping.ignored_labels},
-      {"mean_marker_distance_mm", number_or_null(level)},
-      {"converged_frame", converged},
-      {"mean_marker_distance_all_frames_mm", number_or_null(overall)},
-      {"latency_ms",
-       {{"median", track::quantile(latency_ms, 0.5)}, {"p99", track::quantile(latency_ms, 0.99)}}},
-      {"samples", s2kf_method ? nlohmann::json(session.tracker.samples) : nlohmann::json(nullptr)},
-      {"warnings", warnings},
-  };
+  // The summary, field for field as `s2kf track` writes PREFIX.json (the same builder).
+  result->summary = cli::track_summary(input, settings.method, choice, result->messages, session, run,
+                                       settings.smooth, warnings);
   return result;
 }
 
