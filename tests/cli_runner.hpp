@@ -15,7 +15,8 @@ struct CommandResult {
   std::string output;
 };
 
-/// Runs `S2KF_CLI arguments` through the shell.
+#ifdef S2KF_CLI
+/// Runs `S2KF_CLI arguments` through the shell (S2KF_CLI: the program, defined when it is built).
 inline CommandResult run_command(const std::string& arguments) {
   const std::string command = std::string(S2KF_CLI) + " " + arguments + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
@@ -25,5 +26,6 @@ inline CommandResult run_command(const std::string& arguments) {
   const int status = pipe ? pclose(pipe) : -1;
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
 }
+#endif
 
 }  // namespace s2kf::test_support

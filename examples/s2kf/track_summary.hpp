@@ -48,6 +48,13 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
         {"segment_scale", session.calibration->segment_scale}};
   std::vector<double> latency_ms = run.seconds;
   for (double& s : latency_ms) s *= 1000;
+  // Per marker the tracker left out at least once: how often, and why (MarkerRejection).
+  nlohmann::json rejected = nlohmann::json::array();
+  for (std::size_t m = 0; m < run.rejected_by_innovation.size(); ++m)
+    if (run.rejected_by_innovation[m] + run.rejected_as_frozen[m] > 0)
+      rejected.push_back({{"marker", session.model.markers[m].name},
+                          {"innovation", run.rejected_by_innovation[m]},
+                          {"frozen", run.rejected_as_frozen[m]}});
   std::vector<std::string> markers_used;
   for (int m = 0; m < session.model.marker_count(); ++m)
     if (session.mapping.point_of_marker[m] >= 0) markers_used.push_back(session.model.markers[m].name);
@@ -67,6 +74,7 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
       {"height_source", session.height_source},
       {"markers_used", markers_used},
       {"labels_ignored", session.mapping.ignored_labels},
+      {"rejected_markers", rejected},
       {"mean_marker_distance_mm", number_or_null(level)},
       {"converged_frame", converged},
       {"mean_marker_distance_all_frames_mm", number_or_null(overall)},

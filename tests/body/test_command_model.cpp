@@ -2,6 +2,8 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/pose_columns.hpp>
 
+#include "cli_runner.hpp"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -16,21 +18,7 @@ namespace {
 
 #ifdef S2KF_CLI
 
-struct CliRun {
-  int status;
-  std::string output;  // stdout and stderr
-};
-
-CliRun run(const std::string& arguments) {
-  const std::string command = std::string("\"") + S2KF_CLI + "\" " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return {-1, ""};
-  std::string output;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), static_cast<int>(buffer.size()), pipe) != nullptr) output += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using s2kf::test_support::run_command;
 
 std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
   std::vector<std::vector<std::string>> rows;
@@ -53,7 +41,8 @@ std::string scratch(const std::string& name) {
 
 TEST(CommandModel, PrintsFiftyZeroPoseMarkersScaledToTheHeight) {
   for (double height : {1750.0, 1000.0}) {
-    const CliRun result = run(height == 1750.0 ? "model" : "model --height 1000");
+    const s2kf::test_support::CommandResult result =
+        run_command(height == 1750.0 ? "model" : "model --height 1000");
     ASSERT_EQ(result.status, 0) << result.output;
     const auto rows = parse_csv(result.output);
     ASSERT_EQ(rows.size(), 51u);
@@ -70,7 +59,7 @@ TEST(CommandModel, PrintsFiftyZeroPoseMarkersScaledToTheHeight) {
 }
 
 TEST(CommandModel, JointsFlagPrintsTheJointTable) {
-  const CliRun result = run("model --joints --height 1000");
+  const s2kf::test_support::CommandResult result = run_command("model --joints --height 1000");
   ASSERT_EQ(result.status, 0) << result.output;
   const auto rows = parse_csv(result.output);
   ASSERT_EQ(rows.size(), 41u);
@@ -101,12 +90,12 @@ TEST(CommandModel, JsonAndCsvPosesGiveTheSameMarkers) {
     for (int j = 0; j < 40; ++j) out << ",0";
     out << ",7\n";
   }
-  const CliRun from_json = run("model --pose \"" + json + "\"");
-  const CliRun from_csv = run("model --pose \"" + csv + "\"");
+  const s2kf::test_support::CommandResult from_json = run_command("model --pose \"" + json + "\"");
+  const s2kf::test_support::CommandResult from_csv = run_command("model --pose \"" + csv + "\"");
   ASSERT_EQ(from_json.status, 0) << from_json.output;
   ASSERT_EQ(from_csv.status, 0) << from_csv.output;
   EXPECT_EQ(from_json.output, from_csv.output);
-  EXPECT_NE(from_json.output, run("model").output);
+  EXPECT_NE(from_json.output, run_command("model").output);
   // Root-only check on a marker of the pelvis: L3 = r + R * L3_local.
   const auto rows = parse_csv(from_json.output);
   EXPECT_EQ(rows[9][0], "L3");
@@ -123,13 +112,13 @@ TEST(CommandModel, BadPoseFilesAreUserErrorsNamingTheFile) {
                                                         {broken, "not valid JSON"},
                                                         {missing_column, "no column root_y"},
                                                         {scratch("does_not_exist.csv"), "cannot open"}}) {
-    const CliRun result = run("model --pose \"" + file + "\"");
+    const s2kf::test_support::CommandResult result = run_command("model --pose \"" + file + "\"");
     EXPECT_EQ(result.status, 1) << file;
     EXPECT_NE(result.output.find("s2kf: "), std::string::npos) << result.output;
     EXPECT_NE(result.output.find(file), std::string::npos) << result.output;
     EXPECT_NE(result.output.find(words), std::string::npos) << result.output;
   }
-  const CliRun negative = run("model --height -3");
+  const s2kf::test_support::CommandResult negative = run_command("model --height -3");
   EXPECT_EQ(negative.status, 1);
   EXPECT_NE(negative.output.find("--height must be a positive number"), std::string::npos) << negative.output;
 }

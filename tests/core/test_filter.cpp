@@ -285,6 +285,85 @@ TEST(S2kfGating, OutlierBeyondTheChiSquareQuantileIsRejected) {
   EXPECT_NEAR(s.mean(0), 1.0, 1e-12);
 }
 
+// Three sensors of the same 3-D state, one block each: y = [x; x; x] + v. A block whose innovation
+// is improbable under its own predicted covariance (prior + noise) is left out, and the result is
+// exactly the closed-form Kalman update on the other blocks.
+struct ThreeSensors {
+  GaussianXd prior{Eigen::Vector3d(1, -2, 0.5), Eigen::Matrix3d::Identity() * 4.0};
+  LinearModel model{(Eigen::MatrixXd(9, 3) << Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity(),
+                     Eigen::Matrix3d::Identity())
+                        .finished(),
+                    Eigen::VectorXd::Zero(9)};
+  Eigen::MatrixXd r = Eigen::MatrixXd::Identity(9, 9);
+  s2kf::UpdateOptions options() const {
+    s2kf::UpdateOptions o;
+    o.block_size = 3;
+    o.block_gate_probability = 0.9999;  // chi2_3 quantile 21.1
+    return o;
+  }
+};
+
+TEST(S2kfBlockGating, AnOutlyingBlockIsLeftOutAndTheRestIsTheKalmanUpdate) {
+  ThreeSensors t;
+  Eigen::VectorXd y(9);
+  y << 1.5, -1.0, 0.0, 0.5, -2.5, 1.0, 40.0, 30.0, -20.0;  // sensor 2 is 40 SDs off
+  for (const SampleSet& set : {s2kf::ukf_sample_set(3), s2kf::compute_lcd_sample_set(3, 31).set}) {
+    GaussianXd s = t.prior;
+    S2kf filter(set);
+    const s2kf::UpdateResult result = filter.update(s, t.model, y, t.r, t.options());
+    ASSERT_TRUE(result.ok());
+    EXPECT_EQ(result.rejected_blocks, 1);
+    ASSERT_EQ(filter.rejected_blocks().size(), 1u);
+    EXPECT_EQ(filter.rejected_blocks()[0], 2);
+    EXPECT_EQ(result.observed, 6);
+    GaussianXd expected = t.prior;
+    ObservedMask first_two = ObservedMask::Constant(9, true);
+    first_two.tail(3).setConstant(false);
+    kalman_update(expected, t.model.h, y, t.r, first_two);
+    EXPECT_LT(relative_error(s.mean, expected.mean), 1e-10) << set.kind;
+    EXPECT_LT(relative_error(s.covariance, expected.covariance), 1e-10) << set.kind;
+  }
+}
+
+TEST(S2kfBlockGating, ConsistentBlocksAreAllUsed) {
+  ThreeSensors t;
+  Eigen::VectorXd y(9);
+  y << 1.5, -1.0, 0.0, 0.5, -2.5, 1.0, 2.0, -3.0, 1.5;  // every block within 3 SDs
+  GaussianXd s = t.prior, expected = t.prior;
+  S2kf filter(s2kf::ukf_sample_set(3));
+  const s2kf::UpdateResult result = filter.update(s, t.model, y, t.r, t.options());
+  EXPECT_EQ(result.rejected_blocks, 0);
+  EXPECT_EQ(result.observed, 9);
+  kalman_update(expected, t.model.h, y, t.r, ObservedMask::Constant(9, true));
+  EXPECT_LT(relative_error(s.mean, expected.mean), 1e-10);
+}
+
+TEST(S2kfBlockGating, WhenMostBlocksDisagreeThePredictionIsOffAndNoneIsLeftOut) {
+  ThreeSensors t;
+  Eigen::VectorXd y(9);
+  y << 41.0, 30.0, -20.0, 40.0, 30.5, -20.0, 40.0, 30.0, -19.5;  // all three far: the prior is wrong
+  GaussianXd s = t.prior, expected = t.prior;
+  S2kf filter(s2kf::ukf_sample_set(3));
+  const s2kf::UpdateResult result = filter.update(s, t.model, y, t.r, t.options());
+  EXPECT_EQ(result.rejected_blocks, 0);
+  kalman_update(expected, t.model.h, y, t.r, ObservedMask::Constant(9, true));
+  EXPECT_LT(relative_error(s.mean, expected.mean), 1e-10);
+}
+
+TEST(S2kfBlockGating, AHiddenComponentShrinksItsBlockAndBadBlockSizesThrow) {
+  ThreeSensors t;
+  Eigen::VectorXd y(9);
+  y << 1.5, -1.0, 0.0, 0.5, -2.5, 1.0, 40.0, 0.0, 0.0;
+  ObservedMask observed = ObservedMask::Constant(9, true);
+  observed.tail(2).setConstant(false);  // sensor 2 shows only its x, 40 SDs off: 1 degree of freedom
+  GaussianXd s = t.prior;
+  S2kf filter(s2kf::ukf_sample_set(3));
+  EXPECT_EQ(filter.update(s, t.model, y, t.r, observed, t.options()).rejected_blocks, 1);
+  s2kf::UpdateOptions bad = t.options();
+  bad.block_size = 4;  // does not divide 9
+  EXPECT_THROW(filter.update(s, t.model, y, t.r, bad), s2kf::DimensionError);
+}
+
 TEST(ChiSquare, QuantilesMatchTabulatedValues) {
   EXPECT_NEAR(s2kf::chi_square_quantile(0.95, 1), 3.841458820694124, 1e-9);
   EXPECT_NEAR(s2kf::chi_square_quantile(0.99, 3), 11.344866730144373, 1e-9);

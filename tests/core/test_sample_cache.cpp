@@ -2,6 +2,8 @@
 // recomputed and rewritten, never used. Also the `s2kf samples` command when it is built.
 #include <s2kf/core/sample_cache.hpp>
 
+#include "cli_runner.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -198,16 +200,10 @@ TEST(SampleCache, ConcurrentWritersLeaveOneValidFile) {
 }
 
 #ifdef S2KF_CLI
-// Runs the s2kf program and returns its standard output and exit status.
+// Runs the s2kf program and returns its output and exit status (cli_runner.hpp).
 std::pair<std::string, int> run(const std::string& arguments) {
-  const std::string command = std::string(S2KF_CLI) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return {"", -1};
-  std::string output;
-  char buffer[256];
-  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) output += buffer;
-  const int status = pclose(pipe);
-  return {output, WEXITSTATUS(status)};
+  const s2kf::test_support::CommandResult result = s2kf::test_support::run_command(arguments);
+  return {result.output, result.status};
 }
 
 TEST(SamplesCommand, ComputesThenLoadsAndWritesCsv) {

@@ -1,5 +1,7 @@
 // The C3D reader against real files from many vendors: every value in tests/data/c3d/expected.json
 // (read by an independent reader, cross-checked with ezc3d and py-c3d) must come out the same.
+#include "cli_runner.hpp"
+
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -303,14 +305,11 @@ TEST(C3dRealFiles, InMemoryBufferReadsLikeTheFile) {
 #ifdef S2KF_CLI
 namespace {
 
+// The program's output and exit status (cli_runner.hpp).
 std::string run_cli(const std::string& arguments, int& status) {
-  const std::string command = std::string(S2KF_CLI) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (pipe && std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-  status = pipe ? pclose(pipe) : -1;
-  return output;
+  const s2kf::test_support::CommandResult result = s2kf::test_support::run_command(arguments);
+  status = result.status;
+  return result.output;
 }
 
 TEST(C3dCommand, JsonReportsCountsLabelsMissingAndFrames) {

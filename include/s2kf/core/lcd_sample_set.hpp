@@ -5,6 +5,7 @@
 #pragma once
 
 #include <s2kf/core/box_muller.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/lcd_distance.hpp>
@@ -48,6 +49,8 @@ struct LcdResult {
   bool cached = false;    ///< true when loaded from the disk cache
 };
 
+// The optimiser behind compute_lcd_sample_set, compiled with it (compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
 namespace detail {
 
 /// Outcome of minimize_lbfgs.
@@ -330,12 +333,16 @@ inline Eigen::MatrixXd symmetric_set(const Eigen::MatrixXd& half, bool with_orig
 }
 
 }  // namespace detail
+#endif  // S2KF_DEFINE_HEAVY
 
 /// Computes the optimal symmetric LCD sample set with `count` samples in `dimension` dimensions
 /// (no cache: see lcd_sample_set in sample_cache.hpp). Needs count >= 2 * dimension. The same
 /// arguments give the same set on the same platform. Throws DimensionError for impossible sizes and
 /// std::invalid_argument for nonsensical options.
-inline LcdResult compute_lcd_sample_set(int dimension, int count, const LcdOptions& options = {}) {
+LcdResult compute_lcd_sample_set(int dimension, int count, const LcdOptions& options = {});
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE LcdResult compute_lcd_sample_set(int dimension, int count, const LcdOptions& options) {
   if (dimension < 1) throw DimensionError("compute_lcd_sample_set: the dimension must be at least 1");
   if (count < 2 * dimension)
     throw DimensionError("compute_lcd_sample_set: a symmetric sample set in " + std::to_string(dimension) +
@@ -382,5 +389,6 @@ inline LcdResult compute_lcd_sample_set(int dimension, int count, const LcdOptio
   result.cached = false;
   return result;
 }
+#endif
 
 }  // namespace s2kf

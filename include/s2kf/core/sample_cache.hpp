@@ -3,6 +3,7 @@
 /// optimiser settings, format version), written atomically, validated completely before use.
 #pragma once
 
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/lcd_sample_set.hpp>
 
 #include <Eigen/Core>
@@ -261,8 +262,12 @@ class SampleCache {
 /// valid file exists (cached = true, seconds = 0), otherwise computed with compute_lcd_sample_set
 /// and stored (a cache that cannot be written is skipped silently). Throws like
 /// compute_lcd_sample_set for impossible sizes or options.
-inline LcdResult lcd_sample_set(int dimension, int count, const LcdOptions& options = {},
-                                const SampleCache& cache = SampleCache::default_cache()) {
+LcdResult lcd_sample_set(int dimension, int count, const LcdOptions& options = {},
+                         const SampleCache& cache = SampleCache::default_cache());
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE LcdResult lcd_sample_set(int dimension, int count, const LcdOptions& options,
+                                     const SampleCache& cache) {
   // Validate before touching the disk, so bad arguments fail the same way with or without a cache.
   if (dimension < 1 || count < 2 * dimension) return compute_lcd_sample_set(dimension, count, options);
   if (std::optional<LcdResult> loaded = cache.load(dimension, count, options)) return std::move(*loaded);
@@ -270,5 +275,6 @@ inline LcdResult lcd_sample_set(int dimension, int count, const LcdOptions& opti
   cache.store(dimension, count, options, result);
   return result;
 }
+#endif
 
 }  // namespace s2kf

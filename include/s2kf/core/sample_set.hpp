@@ -3,6 +3,7 @@
 /// moment correction that makes their mean exactly 0 and covariance exactly I.
 #pragma once
 
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
 
 #include <Eigen/Cholesky>
@@ -30,7 +31,10 @@ struct SampleSet {
 /// Makes the equally weighted set z exactly zero-mean (subtracting the sample mean) and exactly
 /// identity-covariance: C = Z Z^T / L, A = chol(C^-1) lower, Z <- A^T Z.
 /// Throws DimensionError when the samples do not span the space (C singular).
-inline void correct_moments(Eigen::MatrixXd& z) {
+void correct_moments(Eigen::MatrixXd& z);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE void correct_moments(Eigen::MatrixXd& z) {
   const double count = static_cast<double>(z.cols());
   z.colwise() -= z.rowwise().mean();
   const Eigen::MatrixXd c = (z * z.transpose()) / count;
@@ -45,6 +49,7 @@ inline void correct_moments(Eigen::MatrixXd& z) {
   const Eigen::MatrixXd a = llt_inv.matrixL();
   z = (a.transpose() * z).eval();
 }
+#endif
 
 /// The unscented set: the origin and +-sqrt(N + kappa) e_k. With kappa = 0.5 (the default) all
 /// 2N + 1 weights are equal, 1 / (2N + 1), which is the "UKF-sized" set of the tracking comparison.

@@ -18,6 +18,7 @@
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace s2kf {
 
@@ -32,12 +33,21 @@ struct UpdateOptions {
   /// 0 disables gating; otherwise the update is rejected (status gated) when the NIS exceeds the
   /// chi-square quantile of this probability with as many degrees of freedom as observed components.
   double gate_probability = 0;
+  /// Robust update against outlying parts of the measurement (a mislabelled or stuck marker): the
+  /// measurement is split into blocks of `block_size` consecutive components (a marker's x, y, z),
+  /// and a block whose own NIS, against its predicted covariance, exceeds the chi-square quantile
+  /// of `block_gate_probability` is left out of this update (rejected_blocks() lists them). When
+  /// more than half of the observed blocks would be left out, none is: then the prediction itself
+  /// is off, and the data must pull it back. 0 disables it; the ordinary (not iterated) update only.
+  double block_gate_probability = 0;
+  int block_size = 1;
 };
 
 struct UpdateResult {
   FilterStatus status = FilterStatus::ok;
   double nis = std::numeric_limits<double>::quiet_NaN();  ///< normalised innovation squared t^T t
   Eigen::Index observed = 0;                              ///< number of observed components used
+  Eigen::Index rejected_blocks = 0;  ///< blocks left out by UpdateOptions::block_gate_probability
   bool ok() const { return status == FilterStatus::ok; }
 };
 
@@ -67,6 +77,9 @@ class SmartSamplingKalmanFilter {
   }
 
   const SampleSet& samples() const { return samples_; }
+
+  /// The blocks (component index / block size) the last update left out as outlying.
+  const std::vector<Eigen::Index>& rejected_blocks() const { return rejected_blocks_; }
 
   /// Closed-form linear prediction x <- A x + w, w ~ N(0, Q).
   FilterStatus predict_linear(State& state, const Eigen::MatrixXd& a, const Eigen::MatrixXd& q) const {
@@ -128,8 +141,13 @@ class SmartSamplingKalmanFilter {
     if (observed.size() != m)
       throw DimensionError("update: the observed mask must have one entry per component");
     if (options.iterations < 1) throw DimensionError("update: iterations must be at least 1");
+    if (options.block_size < 1 || m % options.block_size != 0)
+      throw DimensionError("update: the block size must divide the measurement dimension");
 
     UpdateResult result;
+    rejected_blocks_.clear();
+    if (rejected_blocks_.capacity() < static_cast<std::size_t>(m / options.block_size))
+      rejected_blocks_.reserve(static_cast<std::size_t>(m / options.block_size));  // once, not per step
     select_observed(observed);
     const Eigen::Index mo = result.observed = observed_count_;
     if (mo == 0) {
@@ -145,21 +163,25 @@ class SmartSamplingKalmanFilter {
 
     if ((result.status = draw_samples(state.mean, state.covariance)) != FilterStatus::ok) return result;
     if ((result.status = evaluate_observed(h, m)) != FilterStatus::ok) return result;
+    if (options.block_gate_probability > 0 && positive_weights_)
+      result.observed = reject_outlying_blocks(y, r, options);
+    const Eigen::Index mo_kept = result.observed;
+    result.rejected_blocks = static_cast<Eigen::Index>(rejected_blocks_.size());
 
     // Cyy = sum w (y_i - y^)(y_i - y^)^T + R_oo and Cyx = sum w (y_i - y^)(x_i - m)^T, using the
     // exactly zero-mean deviations S z_i for x.
-    auto cyy = cyy_buffer(mo);
-    for (Eigen::Index j = 0; j < mo; ++j)
-      for (Eigen::Index i = j; i < mo; ++i) cyy(i, j) = r(index_(i), index_(j));
-    auto cyx = cyx_buffer(mo, n);
-    auto y_dev = y_dev_.topRows(mo);
+    auto cyy = cyy_buffer(mo_kept);
+    for (Eigen::Index j = 0; j < mo_kept; ++j)
+      for (Eigen::Index i = j; i < mo_kept; ++i) cyy(i, j) = r(index_(i), index_(j));
+    auto cyx = cyx_buffer(mo_kept, n);
+    auto y_dev = y_dev_.topRows(mo_kept);
     if (symmetric_) {
       // Pairs +s_k, -s_k with equal weights: sum over a pair of w (y_i - y^)(x_i - m)^T is
       // w (y+_k - y-_k) s_k^T (y^ cancels), so Cyx costs half the product over all samples.
       scale_columns_by_sqrt_weights(y_dev);
       rank_update_lower(cyy, y_dev);
       const Eigen::Index h = half_count_;
-      auto pair_difference = pair_difference_.topRows(mo);
+      auto pair_difference = pair_difference_.topRows(mo_kept);
       pair_difference.noalias() = y_dev.middleCols(origin_count_, h) - y_dev.rightCols(h);
       half_deviation_ = half_deviation_ * sqrt_weights_.segment(origin_count_, h).asDiagonal();
       cyx.setZero();
@@ -184,12 +206,12 @@ class SmartSamplingKalmanFilter {
       result.status = FilterStatus::innovation_not_positive_definite;
       return result;
     }
-    auto innovation = innovation_.head(mo);
-    for (Eigen::Index k = 0; k < mo; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
+    auto innovation = innovation_.head(mo_kept);
+    for (Eigen::Index k = 0; k < mo_kept; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
     solve_lower_in_place(llt.matrixLLT(), cyx);
     llt.matrixL().solveInPlace(innovation);
     result.nis = innovation.squaredNorm();
-    if (gated(result.nis, mo, options)) {
+    if (gated(result.nis, mo_kept, options)) {
       result.status = FilterStatus::gated;
       return result;
     }
@@ -341,6 +363,69 @@ class SmartSamplingKalmanFilter {
     return FilterStatus::ok;
   }
 
+  /// UpdateOptions::block_gate_probability: finds the observed blocks whose innovation is
+  /// improbable under their own predicted covariance, C_b = sum_i w_i d_i d_i^T + R_bb (d_i the
+  /// block's sample deviations), and removes their rows from the evaluated samples. Returns the
+  /// number of observed components kept.
+  Eigen::Index reject_outlying_blocks(const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                                      const UpdateOptions& options) {
+    using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
+    using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxBlock, 1>;
+    const Eigen::Index mo = observed_count_, b = options.block_size;
+    if (b > kMaxBlock) throw DimensionError("update: blocks of more than 6 components cannot be gated");
+    // The quantile for as many degrees of freedom as a block has observed components (a bisection
+    // that costs more than the gate itself: computed when the probability changes).
+    if (block_limit_probability_ != options.block_gate_probability) {
+      for (int d = 1; d <= kMaxBlock; ++d)
+        block_limit_[d] = chi_square_quantile(options.block_gate_probability, static_cast<double>(d));
+      block_limit_probability_ = options.block_gate_probability;
+    }
+    const double* limit = block_limit_;
+    Eigen::Index observed_blocks = 0;
+    for (Eigen::Index k = 0; k < mo;) {
+      const Eigen::Index block = index_(k) / b;
+      Eigen::Index end = k;
+      while (end < mo && index_(end) / b == block) ++end;
+      const Eigen::Index d = end - k;
+      Small c(d, d);
+      SmallVector e(d);
+      for (Eigen::Index i = 0; i < d; ++i) {
+        e(i) = y(index_(k + i)) - y_mean_(k + i);
+        for (Eigen::Index j = 0; j < d; ++j) c(i, j) = r(index_(k + i), index_(k + j));
+      }
+      for (Eigen::Index s = 0; s < samples_.count(); ++s) {
+        const double w = samples_.weights(s);
+        for (Eigen::Index j = 0; j < d; ++j)
+          for (Eigen::Index i = 0; i < d; ++i) c(i, j) += w * y_dev_(k + i, s) * y_dev_(k + j, s);
+      }
+      const Eigen::LLT<Small> llt(c);
+      if (llt.info() == Eigen::Success && e.dot(llt.solve(e)) > limit[d]) rejected_blocks_.push_back(block);
+      ++observed_blocks;
+      k = end;
+    }
+    if (rejected_blocks_.empty()) return mo;
+    if (2 * static_cast<Eigen::Index>(rejected_blocks_.size()) > observed_blocks) {
+      rejected_blocks_.clear();
+      return mo;
+    }
+    // Keep the other rows, in order, in index_, y_mean_ and y_dev_ (in place: kept <= read).
+    Eigen::Index kept = 0;
+    std::size_t next_rejected = 0;
+    for (Eigen::Index k = 0; k < mo; ++k) {
+      const Eigen::Index block = index_(k) / b;
+      while (next_rejected < rejected_blocks_.size() && rejected_blocks_[next_rejected] < block)
+        ++next_rejected;
+      if (next_rejected < rejected_blocks_.size() && rejected_blocks_[next_rejected] == block) continue;
+      index_(kept) = index_(k);
+      y_mean_(kept) = y_mean_(k);
+      if (kept != k) y_dev_.row(kept).head(samples_.count()) = y_dev_.row(k).head(samples_.count());
+      ++kept;
+    }
+    observed_count_ = kept;
+    return kept;
+  }
+  static constexpr int kMaxBlock = 6;
+
   Eigen::Block<Eigen::MatrixXd> cyy_buffer(Eigen::Index mo) {
     if (cyy_.rows() < mo) cyy_.resize(mo, mo);
     innovation_.resize(std::max<Eigen::Index>(innovation_.size(), mo));
@@ -431,6 +516,9 @@ class SmartSamplingKalmanFilter {
   Eigen::VectorXd y_mean_, innovation_;
   Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> index_;
   Eigen::Index observed_count_ = 0;
+  std::vector<Eigen::Index> rejected_blocks_;  ///< ascending
+  double block_limit_probability_ = 0;
+  double block_limit_[kMaxBlock + 1] = {};  ///< chi-square quantiles by degrees of freedom
 };
 
 using S2kf = SmartSamplingKalmanFilter<Eigen::Dynamic>;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
@@ -39,7 +40,10 @@ namespace s2kf::track {
 
 /// Throws std::invalid_argument (a sentence) unless `truth` fits the recording: the model's joint
 /// columns and one row per frame, numbered 0, 1, ...
-inline void check_truth(const io::MotionTable& truth, const Session& setup, Eigen::Index frames) {
+void check_truth(const io::MotionTable& truth, const Session& setup, Eigen::Index frames);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE void check_truth(const io::MotionTable& truth, const Session& setup, Eigen::Index frames) {
   if (truth.joint_names != setup.model.joint_names())
     throw std::invalid_argument("the truth's joint columns are not the body model's " +
                                 std::to_string(setup.model.joint_count()) + " joints (BPx ... RAy) in order");
@@ -52,9 +56,13 @@ inline void check_truth(const io::MotionTable& truth, const Session& setup, Eige
                                   std::to_string(r + 1) + " holds frame " +
                                   std::to_string(truth.frame[static_cast<std::size_t>(r)]));
 }
+#endif
 
 /// The first rows of a motion table (all of them when rows <= 0 or beyond its length).
-inline io::MotionTable first_rows(const io::MotionTable& motion, Eigen::Index rows) {
+io::MotionTable first_rows(const io::MotionTable& motion, Eigen::Index rows);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE io::MotionTable first_rows(const io::MotionTable& motion, Eigen::Index rows) {
   if (rows <= 0 || rows >= motion.frames()) return motion;
   io::MotionTable head = motion;
   head.values = motion.values.topRows(rows);
@@ -62,13 +70,19 @@ inline io::MotionTable first_rows(const io::MotionTable& motion, Eigen::Index ro
   head.time.resize(static_cast<std::size_t>(rows));
   return head;
 }
+#endif
 
 /// The mean distance (mm) between the markers a pose predicts (3 x model markers) and the points
 /// of `reference` (3 x P) that are mapped and visible there: the paper's "average marker distance",
 /// against every recorded marker whether or not the tracker was shown it. NaN when none.
-inline double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eigen::Matrix3Xd& reference,
-                                   const Eigen::Array<bool, Eigen::Dynamic, 1>& reference_visible,
-                                   const MarkerMapping& mapping) {
+double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eigen::Matrix3Xd& reference,
+                            const Eigen::Array<bool, Eigen::Dynamic, 1>& reference_visible,
+                            const MarkerMapping& mapping);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eigen::Matrix3Xd& reference,
+                                        const Eigen::Array<bool, Eigen::Dynamic, 1>& reference_visible,
+                                        const MarkerMapping& mapping) {
   double sum = 0;
   int count = 0;
   for (std::size_t m = 0; m < mapping.point_of_marker.size(); ++m) {
@@ -79,14 +93,21 @@ inline double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eige
   }
   return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
 }
+#endif
 
 /// Tracks `input` with one method; `reference` (same frames and points) is what the marker
 /// distance is measured against (the input itself, or the complete recording when the input had
 /// markers hidden). on_frame(index) is called after every frame.
-inline TrackingRun track_recording(const Session& setup, const MarkerSequence& input,
-                                   const MarkerSequence& reference, Method method, int samples,
-                                   std::vector<double>* distance_to_reference = nullptr,
-                                   const std::function<void(long)>& on_frame = {}) {
+TrackingRun track_recording(const Session& setup, const MarkerSequence& input,
+                            const MarkerSequence& reference, Method method, int samples,
+                            std::vector<double>* distance_to_reference = nullptr,
+                            const std::function<void(long)>& on_frame = {});
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE TrackingRun track_recording(const Session& setup, const MarkerSequence& input,
+                                        const MarkerSequence& reference, Method method, int samples,
+                                        std::vector<double>* distance_to_reference,
+                                        const std::function<void(long)>& on_frame) {
   if (reference.frame_count() != input.frame_count() || reference.point_count() != input.point_count())
     throw std::invalid_argument("the reference recording must have the input's frames and points");
   Eigen::Index f = 0;
@@ -118,6 +139,7 @@ inline TrackingRun track_recording(const Session& setup, const MarkerSequence& i
   GradientBaseline baseline(setup.model, setup.mapping);
   return run_with(baseline);
 }
+#endif
 
 /// One method on one recording, summarised as the paper's evaluation asks (docs/results.md).
 struct MethodResult {
@@ -133,8 +155,12 @@ struct MethodResult {
   std::optional<TruthComparison> truth;          ///< when ground truth was given
 };
 
-inline MethodResult summarise(Method method, int samples, TrackingRun run, const Session& setup,
-                              const io::MotionTable* truth, long warmup) {
+MethodResult summarise(Method method, int samples, TrackingRun run, const Session& setup,
+                       const io::MotionTable* truth, long warmup);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE MethodResult summarise(Method method, int samples, TrackingRun run, const Session& setup,
+                                   const io::MotionTable* truth, long warmup) {
   MethodResult result;
   result.method = method;
   result.samples = method == Method::s2kf ? samples : 0;
@@ -156,22 +182,32 @@ inline MethodResult summarise(Method method, int samples, TrackingRun run, const
   result.run = std::move(run);
   return result;
 }
+#endif
 
 /// Tracks the recording with one method and summarises it; `truth` (optional) must have a row
 /// per frame of the recording with the model's joint columns.
-inline MethodResult evaluate_method(const Session& setup, const MarkerSequence& recording, Method method,
-                                    int samples, const io::MotionTable* truth, long warmup,
-                                    const std::function<void(long)>& on_frame = {}) {
+MethodResult evaluate_method(const Session& setup, const MarkerSequence& recording, Method method,
+                             int samples, const io::MotionTable* truth, long warmup,
+                             const std::function<void(long)>& on_frame = {});
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE MethodResult evaluate_method(const Session& setup, const MarkerSequence& recording, Method method,
+                                         int samples, const io::MotionTable* truth, long warmup,
+                                         const std::function<void(long)>& on_frame) {
   TrackingRun run = track_recording(setup, recording, recording, method, samples, nullptr, on_frame);
   return summarise(method, samples, std::move(run), setup, truth, warmup);
 }
+#endif
 
 /// Per-frame minimum, maximum and mean over Monte Carlo runs (NaN values skipped).
 struct Band {
   std::vector<double> min, max, mean;
 };
 
-inline Band band_over_runs(const std::vector<std::vector<double>>& runs) {
+Band band_over_runs(const std::vector<std::vector<double>>& runs);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE Band band_over_runs(const std::vector<std::vector<double>>& runs) {
   Band band;
   const std::size_t frames = runs.empty() ? 0 : runs.front().size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -187,6 +223,7 @@ inline Band band_over_runs(const std::vector<std::vector<double>>& runs) {
   }
   return band;
 }
+#endif
 
 struct OcclusionOptions {
   int runs = 100;
@@ -213,7 +250,10 @@ struct OcclusionStudy {
 };
 
 /// The recording with the markers a visibility mask hides set to not visible (and NaN).
-inline MarkerSequence hide_points(const MarkerSequence& complete, const sim::Visibility& keep) {
+MarkerSequence hide_points(const MarkerSequence& complete, const sim::Visibility& keep);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE MarkerSequence hide_points(const MarkerSequence& complete, const sim::Visibility& keep) {
   MarkerSequence occluded = complete;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (Eigen::Index f = 0; f < complete.frame_count(); ++f)
@@ -224,11 +264,17 @@ inline MarkerSequence hide_points(const MarkerSequence& complete, const sim::Vis
       }
   return occluded;
 }
+#endif
 
 /// `progress(run)` is called after each run. `warmup` frames are left out of the worst distance.
-inline OcclusionStudy occlusion_monte_carlo(const Session& setup, const MarkerSequence& complete,
-                                            const OcclusionOptions& options, long warmup = 20,
-                                            const std::function<void(int)>& progress = {}) {
+OcclusionStudy occlusion_monte_carlo(const Session& setup, const MarkerSequence& complete,
+                                     const OcclusionOptions& options, long warmup = 20,
+                                     const std::function<void(int)>& progress = {});
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const Session& setup, const MarkerSequence& complete,
+                                                 const OcclusionOptions& options, long warmup,
+                                                 const std::function<void(int)>& progress) {
   if (options.runs < 1) throw std::invalid_argument("the occlusion study needs at least one run");
   sim::validate(options.occlusion);
   OcclusionStudy study;
@@ -276,12 +322,18 @@ inline OcclusionStudy occlusion_monte_carlo(const Session& setup, const MarkerSe
       complete.frame_count() ? hidden_sum / (static_cast<double>(options.runs) * complete.frame_count()) : 0;
   return study;
 }
+#endif
 
 /// Latency and accuracy of the S2KF for each sample count L on one recording.
-inline std::vector<MethodResult> sample_sweep(const Session& setup, const MarkerSequence& recording,
-                                              const std::vector<int>& sample_counts,
-                                              const io::MotionTable* truth, long warmup,
-                                              const std::function<void(int)>& progress = {}) {
+std::vector<MethodResult> sample_sweep(const Session& setup, const MarkerSequence& recording,
+                                       const std::vector<int>& sample_counts, const io::MotionTable* truth,
+                                       long warmup, const std::function<void(int)>& progress = {});
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE std::vector<MethodResult> sample_sweep(const Session& setup, const MarkerSequence& recording,
+                                                   const std::vector<int>& sample_counts,
+                                                   const io::MotionTable* truth, long warmup,
+                                                   const std::function<void(int)>& progress) {
   std::vector<MethodResult> results;
   for (int samples : sample_counts) {
     results.push_back(evaluate_method(setup, recording, Method::s2kf, samples, truth, warmup));
@@ -289,5 +341,6 @@ inline std::vector<MethodResult> sample_sweep(const Session& setup, const Marker
   }
   return results;
 }
+#endif
 
 }  // namespace s2kf::track

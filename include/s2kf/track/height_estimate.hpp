@@ -6,6 +6,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 
@@ -73,9 +74,13 @@ struct HeightEstimate {
 
 /// The body height from up to `max_frames` frames spread evenly through the source; nothing when
 /// the mapped markers form no rigid pair.
-inline std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
-                                                     const MarkerMapping& mapping,
-                                                     std::int64_t max_frames = 200) {
+std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
+                                              const MarkerMapping& mapping, std::int64_t max_frames = 200);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
+                                                          const MarkerMapping& mapping,
+                                                          std::int64_t max_frames) {
   HeightEstimator estimator(model, mapping);
   const std::int64_t frames = source.frame_count();
   const std::int64_t step = std::max<std::int64_t>(1, frames / max_frames);
@@ -88,5 +93,6 @@ inline std::optional<HeightEstimate> estimate_height(FrameSource& source, const 
   if (!mm) return std::nullopt;
   return HeightEstimate{*mm, estimator.pair_count()};
 }
+#endif
 
 }  // namespace s2kf::track

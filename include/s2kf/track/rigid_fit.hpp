@@ -3,6 +3,8 @@
 /// without scale): how the tracker places the root on its first frame.
 #pragma once
 
+#include <s2kf/core/compilation_mode.hpp>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -15,12 +17,16 @@ struct RigidTransform {
 
 /// R, t minimising sum |R from_i + t - to_i|^2 over the columns (3 x N each; N >= 3 points not on
 /// one line for a unique answer).
-inline RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to) {
+RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to) {
   const Eigen::Matrix4d fit = Eigen::umeyama(from, to, false);
   RigidTransform transform;
   transform.rotation = fit.topLeftCorner<3, 3>();
   transform.translation = fit.topRightCorner<3, 1>();
   return transform;
 }
+#endif
 
 }  // namespace s2kf::track

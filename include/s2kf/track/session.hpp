@@ -13,6 +13,7 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
@@ -109,8 +110,12 @@ inline std::vector<double> calibration_weights(const body::MarkerSet& set, doubl
 /// Prepares a session: checks the recording, maps its labels to the set's markers, finds the
 /// subject's height, scales the model and, when asked, calibrates the subject on the first
 /// `calibration_frames` frames (samples: the tracker's sample set, for 6 + joints dimensions).
-inline Session prepare_session(FrameSource& source, const body::MarkerSet& set, const SessionOptions& options,
-                               const SampleSet& samples) {
+Session prepare_session(FrameSource& source, const body::MarkerSet& set, const SessionOptions& options,
+                        const SampleSet& samples);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& set,
+                                    const SessionOptions& options, const SampleSet& samples) {
   options.tracker.validate();
   if (source.frame_count() == 0) throw std::invalid_argument("the recording holds no complete frame");
   if (!(source.rate_hz() > 0) || !std::isfinite(source.rate_hz()))
@@ -179,6 +184,24 @@ inline Session prepare_session(FrameSource& source, const body::MarkerSet& set, 
   }
   return session;
 }
+#endif
+
+/// One warning per marker the tracker left out of more than 1 % of the frames, with the reason:
+/// a stuck marker or a labelling fault is then named, not averaged into the pose.
+inline void warn_about_rejected_markers(const body::BodyModel& model, TrackingRun& run) {
+  for (std::size_t m = 0; m < run.rejected_by_innovation.size(); ++m) {
+    const long innovation = run.rejected_by_innovation[m], frozen = run.rejected_as_frozen[m];
+    if (100 * (innovation + frozen) <= run.frames) continue;
+    std::string why;
+    if (frozen > 0) why = std::to_string(frozen) + " frozen: its coordinates repeat exactly";
+    if (innovation > 0)
+      why += (why.empty() ? "" : "; ") + std::to_string(innovation) +
+             " far from where the body puts it: swapped, mislabelled or jumping";
+    run.warnings.push_back("marker " + model.markers[m].name + " was left out of " +
+                           std::to_string(innovation + frozen) + " of " + std::to_string(run.frames) +
+                           " frames (" + why + ")");
+  }
+}
 
 enum class Method { s2kf, baseline };
 
@@ -205,8 +228,12 @@ struct RunHooks {
 /// Runs a prepared session over every frame of `source`. A coordinate beyond a kilometre stops the
 /// run with std::invalid_argument (the file's units or scale are wrong). With a sink, memory stays
 /// constant in the recording's length (unless smoothing); TrackingRun keeps the per-frame series.
-inline TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
-                               const RunOptions& options = {}, const RunHooks& hooks = {}) {
+TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
+                        const RunOptions& options = {}, const RunHooks& hooks = {});
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
+                                    const RunOptions& options, const RunHooks& hooks) {
   if (options.smooth && options.method != Method::s2kf)
     throw std::invalid_argument("smoothing works on the S2KF's estimates, not the baseline's");
   std::int64_t next = 0;
@@ -232,9 +259,12 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
                         hooks.on_frame, hooks.sink);
   }
   Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
-  if (!options.smooth)
-    return run_tracking(tracker, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers,
-                        hooks.on_frame, hooks.sink);
+  if (!options.smooth) {
+    TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
+                                   options.keep_predicted_markers, hooks.on_frame, hooks.sink);
+    warn_about_rejected_markers(session.model, run);
+    return run;
+  }
   TrackingSmoother smoother(tracker);
   const auto on_frame = [&](long index) {
     smoother.record(tracker, index);
@@ -243,6 +273,7 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
   TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
                                  options.keep_predicted_markers, on_frame);
   smoother.smooth(run.motion);
+  warn_about_rejected_markers(session.model, run);
   if (hooks.sink)
     for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {
       const auto f = static_cast<std::size_t>(r);
@@ -252,11 +283,15 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
     }
   return run;
 }
+#endif
 
 /// The calibrated subject's mean marker distance over the calibration window, from the run itself:
 /// the tracker is causal, so the run's first frames are what a final calibration pass would track.
 /// NaN when the session was not calibrated or nothing was measured there.
-inline double calibrated_distance_mm(const Session& session, const TrackingRun& run) {
+double calibrated_distance_mm(const Session& session, const TrackingRun& run);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE double calibrated_distance_mm(const Session& session, const TrackingRun& run) {
   if (!session.calibration) return std::numeric_limits<double>::quiet_NaN();
   const auto& distance = run.mean_marker_distance;
   const std::size_t end =
@@ -269,5 +304,6 @@ inline double calibrated_distance_mm(const Session& session, const TrackingRun& 
                                        distance.begin() + static_cast<std::ptrdiff_t>(end)),
                    0);
 }
+#endif
 
 }  // namespace s2kf::track

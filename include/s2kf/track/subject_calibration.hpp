@@ -10,6 +10,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
@@ -96,6 +97,8 @@ struct SubjectCalibration {
   double mean_marker_distance_after_mm = std::numeric_limits<double>::quiet_NaN();
 };
 
+// The bundle adjustment behind calibrate_subject, compiled with it (compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
 namespace detail {
 
 /// Segments whose outgoing bones can be scaled: every segment that is the parent of a joint with
@@ -437,6 +440,7 @@ class BundleAdjustment {
 };
 
 }  // namespace detail
+#endif  // S2KF_DEFINE_HEAVY
 
 /// Calibrates `model` (a base model after apply_marker_set, scaled to the subject's height) on a
 /// recording (its frames consecutive, so the tracker can follow them), `mapping` from its points to
@@ -444,10 +448,15 @@ class BundleAdjustment {
 /// frame's pose, leaves out outlying residuals, and bundle-adjusts those poses together with the
 /// bone-length factors and marker offsets. Markers the recording never shows keep their offsets.
 /// Joint limits are not touched, and the adjusted poses stay inside them.
-inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerMapping& mapping,
-                                            const TrackerOptions& tracker_options,
-                                            const MarkerSequence& recording, const SampleSet& samples,
-                                            const CalibrationOptions& options = {}) {
+SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerMapping& mapping,
+                                     const TrackerOptions& tracker_options, const MarkerSequence& recording,
+                                     const SampleSet& samples, const CalibrationOptions& options = {});
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerMapping& mapping,
+                                                 const TrackerOptions& tracker_options,
+                                                 const MarkerSequence& recording, const SampleSet& samples,
+                                                 const CalibrationOptions& options) {
   options.validate();
   model.validate();
   if (recording.visible.cols() != recording.positions.cols() ||
@@ -521,5 +530,6 @@ inline SubjectCalibration calibrate_subject(const body::BodyModel& model, const 
   if (options.final_pass) result.mean_marker_distance_after_mm = result.passes.back().mean_marker_distance_mm;
   return result;
 }
+#endif
 
 }  // namespace s2kf::track

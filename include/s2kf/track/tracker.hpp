@@ -8,6 +8,7 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
@@ -19,12 +20,31 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace s2kf::track {
+
+/// Why a marker the recording shows was left out of a frame's update.
+enum class MarkerRejection : std::uint8_t {
+  none,
+  innovation,  ///< improbable under its predicted covariance (a swapped, mislabelled or jumping marker)
+  frozen,      ///< its coordinates repeat exactly while the body moves (a stuck marker)
+};
+
+inline const char* to_string(MarkerRejection rejection) {
+  switch (rejection) {
+    case MarkerRejection::innovation:
+      return "innovation";
+    case MarkerRejection::frozen:
+      return "frozen";
+    default:
+      return "none";
+  }
+}
 
 /// What the tracker knows after one frame.
 struct FrameEstimate {
@@ -37,6 +57,9 @@ struct FrameEstimate {
   Eigen::VectorXd marker_distance;     ///< per model marker, mm; NaN where not observed
   double mean_marker_distance = std::numeric_limits<double>::quiet_NaN();
   int visible_markers = 0;  ///< mapped markers observed this frame
+  /// Per model marker: none, or why the marker was seen but left out of this frame's update.
+  std::vector<MarkerRejection> rejection;
+  int rejected_markers = 0;  ///< markers left out this frame (rejection != none)
   double nis = std::numeric_limits<double>::quiet_NaN();
   double seconds = 0;  ///< time spent in process()
 };
@@ -55,44 +78,7 @@ class Tracker {
   /// come from is the caller's business, so the tracker does no file I/O. Options are checked first:
   /// std::invalid_argument (one sentence) before any work.
   Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options, double rate_hz,
-          const SampleSet& samples)
-      : model_(std::move(model)),
-        mapping_(std::move(mapping)),
-        options_(validated(std::move(options), rate_hz)),
-        rate_hz_(rate_hz),
-        filter_(checked(samples, kRootDofs + model_.joint_count())),
-        measurement_model_(model_, body::OrientationParameterization::local_rotation_error),
-        mean_markers_model_(model_, body::OrientationParameterization::local_rotation_error) {
-    if (mapping_.point_of_marker.size() != static_cast<std::size_t>(model_.marker_count()))
-      throw std::invalid_argument("the marker mapping does not fit the body model");
-    for (int m = 0; m < model_.marker_count(); ++m)
-      if (mapping_.point_of_marker[m] >= 0) used_markers_.push_back(m);
-    if (used_markers_.empty())
-      throw std::invalid_argument("no recording label matches a marker of the model");
-    measurement_model_.select_markers(used_markers_);
-    const int n = state_dimension();
-    const double dt = 1.0 / rate_hz_;
-    process_noise_ = Eigen::MatrixXd::Zero(n, n);
-    process_noise_.diagonal().segment<3>(0).setConstant(std::pow(options_.position_speed_mm_per_s * dt, 2));
-    process_noise_.diagonal().segment<3>(3).setConstant(
-        std::pow(options_.orientation_speed_rad_per_s * dt, 2));
-    process_noise_.diagonal().tail(joint_count()).setConstant(std::pow(options_.joint_speed_per_s * dt, 2));
-    const Eigen::Index m = 3 * static_cast<Eigen::Index>(used_markers_.size());
-    if (!options_.marker_noise_mm_per_marker.empty() &&
-        options_.marker_noise_mm_per_marker.size() != static_cast<std::size_t>(model_.marker_count()))
-      throw std::invalid_argument("one marker noise per model marker is needed (or none)");
-    noise_ = Eigen::MatrixXd::Zero(m, m);
-    for (std::size_t k = 0; k < used_markers_.size(); ++k) {
-      double sd = options_.marker_noise_mm;
-      if (!options_.marker_noise_mm_per_marker.empty() &&
-          !std::isnan(options_.marker_noise_mm_per_marker[static_cast<std::size_t>(used_markers_[k])]))
-        sd = options_.marker_noise_mm_per_marker[static_cast<std::size_t>(used_markers_[k])];
-      noise_.diagonal().segment<3>(3 * static_cast<Eigen::Index>(k)).setConstant(sd * sd);
-    }
-    measurement_.resize(m);
-    observed_.resize(m);
-    estimate_.marker_distance.resize(model_.marker_count());
-  }
+          const SampleSet& samples);
 
   int joint_count() const { return model_.joint_count(); }
   int state_dimension() const { return kRootDofs + model_.joint_count(); }
@@ -113,53 +99,7 @@ class Tracker {
   /// One frame: the recording's points (3 x P, mm, in recording order) and which are visible.
   /// Non-finite coordinates count as not visible.
   const FrameEstimate& process(const Eigen::Matrix3Xd& points,
-                               const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
-    const auto start = std::chrono::steady_clock::now();
-    if (points.cols() != visible.size())
-      throw std::invalid_argument("process: one visibility flag per recording point is needed");
-    int count = 0;
-    for (std::size_t k = 0; k < used_markers_.size(); ++k) {
-      const int point = mapping_.point_of_marker[used_markers_[k]];
-      const bool seen = point < points.cols() && visible(point) && points.col(point).allFinite();
-      for (int a = 0; a < 3; ++a) {
-        observed_(3 * k + a) = seen;
-        measurement_(3 * k + a) = seen ? points(a, point) : 0.0;
-      }
-      count += seen;
-    }
-    estimate_.visible_markers = count;
-    ++frames_;
-    if (!initialised_) {
-      if (count >= options_.min_markers_to_start) initialise(points);
-      if (!initialised_) {
-        estimate_.tracked = false;
-        estimate_.status = FilterStatus::nothing_observed;
-        finish(points, visible, start);
-        return estimate_;
-      }
-    } else {
-      filter_.predict_random_walk(state_, process_noise_);
-    }
-    UpdateOptions update_options;
-    update_options.gate_probability = options_.gate_probability;
-    if (frames_since_start_ <= options_.converging_frames)
-      update_options.iterations =
-          frames_since_start_ == 0 ? options_.initial_iterations : options_.converging_iterations;
-    ++frames_since_start_;
-    estimate_.status = FilterStatus::nothing_observed;
-    estimate_.nis = std::numeric_limits<double>::quiet_NaN();
-    if (count > 0) {
-      measurement_model_.set_reference_orientation(reference_rotation_);
-      const UpdateResult result =
-          filter_.update(state_, measurement_model_, measurement_, noise_, observed_, update_options);
-      estimate_.status = result.status;
-      estimate_.nis = result.nis;
-      if (result.ok()) recentre();
-    }
-    estimate_.tracked = true;
-    finish(points, visible, start);
-    return estimate_;
-  }
+                               const Eigen::Array<bool, Eigen::Dynamic, 1>& visible);
 
  private:
   static TrackerOptions validated(TrackerOptions options, double rate_hz) {
@@ -178,52 +118,7 @@ class Tracker {
 
   /// Start from the first frame with enough markers: root pose from a rigid fit of the visible
   /// markers to the model's zero pose (or the paper's marker mean), joints near the zero pose.
-  void initialise(const Eigen::Matrix3Xd& points) {
-    const int n = state_dimension();
-    state_.mean = Eigen::VectorXd::Zero(n);
-    state_.covariance = Eigen::MatrixXd::Zero(n, n);
-    Eigen::Matrix3Xd measured(3, estimate_.visible_markers), reference(3, estimate_.visible_markers);
-    const Eigen::Matrix3Xd zero_pose = body::marker_positions(model_, body::zero_pose(model_));
-    int k = 0;
-    for (std::size_t u = 0; u < used_markers_.size(); ++u) {
-      if (!observed_(3 * u)) continue;
-      measured.col(k) = points.col(mapping_.point_of_marker[used_markers_[u]]);
-      reference.col(k) = zero_pose.col(used_markers_[u]);
-      ++k;
-    }
-    const Eigen::Vector3d centroid = measured.rowwise().mean();
-    reference_rotation_.setIdentity();
-    Eigen::Vector3d position = centroid;
-    if (options_.rigid_initialisation) {
-      const RigidTransform fit = fit_rigid_transform(reference, measured);
-      reference_rotation_ = fit.rotation;
-      position = fit.translation;
-    }
-    state_.mean.head<3>() = position;
-    state_.covariance.diagonal().head<3>().setConstant(std::pow(options_.initial_position_sd_mm, 2));
-    if (!options_.rigid_initialisation) {
-      // The paper: C_r is the sample covariance of the first frame's markers.
-      const Eigen::Matrix3Xd centred = measured.colwise() - centroid;
-      state_.covariance.topLeftCorner<3, 3>() =
-          centred * centred.transpose() / std::max<Eigen::Index>(1, k - 1);
-    }
-    state_.covariance.diagonal().segment<3>(3).setConstant(std::pow(options_.initial_orientation_sd_rad, 2));
-    // Joints: the paper starts every joint at mid-range (Theta = 0); the default starts at the
-    // zero pose (standing) but keeps a joint whose zero lies on a limit a little inside it, where
-    // sin still has slope, so the filter can move it.
-    if (options_.joints_start_near_zero_pose) {
-      for (int j = 0; j < joint_count(); ++j) {
-        const double lower = model_.joints[j].lower, upper = model_.joints[j].upper;
-        if (upper <= lower) continue;
-        const double normalised =
-            std::clamp((0.0 - 0.5 * (upper + lower)) / (0.5 * (upper - lower)), -0.8, 0.8);
-        state_.mean(kRootDofs + j) = std::asin(normalised);
-      }
-    }
-    state_.covariance.diagonal().tail(joint_count()).setConstant(std::pow(options_.initial_joint_sd, 2));
-    initialised_ = true;
-    frames_since_start_ = 0;
-  }
+  void initialise(const Eigen::Matrix3Xd& points);
 
   /// Folds the orientation error into the reference and every Theta onto the principal branch
   /// (state_chart.hpp).
@@ -233,47 +128,17 @@ class Tracker {
     fold_joint_parameters(state_.mean, state_.covariance);
   }
 
+  /// TrackerOptions::axial_split_sd_rad: for each pair of stacked twists (a, b), the linearised
+  /// pseudo-measurement 0 = theta_a - theta_b + v, v ~ N(0, sd^2), as an exact Kalman update of the
+  /// two Theta coordinates (a rank-one change of the covariance).
+  void split_axial_twists();
+
   void finish(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible,
-              std::chrono::steady_clock::time_point start) {
-    estimate_.marker_distance.setConstant(std::numeric_limits<double>::quiet_NaN());
-    estimate_.mean_marker_distance = std::numeric_limits<double>::quiet_NaN();
-    if (estimate_.tracked) {
-      estimate_.root_rotation = reference_rotation_;
-      measurement_model_.set_reference_orientation(reference_rotation_);
-      write_pose(estimate_.pose);
-      estimate_.covariance = state_.covariance;  // same size every frame: no allocation
-      // Every model marker at the mean, through the batched model (allocation-free after its
-      // first call); it equals marker_positions(model_, pose) to rounding.
-      const Eigen::Index markers = model_.marker_count();
-      if (estimate_.predicted_markers.cols() != markers) estimate_.predicted_markers.resize(3, markers);
-      mean_markers_model_.set_reference_orientation(reference_rotation_);
-      mean_markers_model_(state_.mean,
-                          Eigen::Map<Eigen::MatrixXd>(estimate_.predicted_markers.data(), 3 * markers, 1));
-      double sum = 0;
-      int count = 0;
-      for (int m = 0; m < model_.marker_count(); ++m) {
-        const int point = mapping_.point_of_marker[m];
-        if (point < 0 || point >= points.cols() || !visible(point) || !points.col(point).allFinite())
-          continue;
-        const double d = (points.col(point) - estimate_.predicted_markers.col(m)).norm();
-        estimate_.marker_distance(m) = d;
-        sum += d;
-        ++count;
-      }
-      if (count > 0) estimate_.mean_marker_distance = sum / count;
-    }
-    estimate_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  }
+              std::chrono::steady_clock::time_point start);
 
   /// measurement_model_.pose(state_.mean) written in place (that one returns its joint angles in
   /// a new vector), through the same bounded map.
-  void write_pose(body::Pose& pose) const {
-    pose.root_position = state_.mean.head<3>();
-    pose.root_rpy = body::rpy_from_rotation(measurement_model_.root_rotation(state_.mean.segment<3>(3)));
-    const body::BoundedJoints& joints = measurement_model_.bounded_joints();
-    if (pose.joints.size() != joint_count()) pose.joints.resize(joint_count());
-    for (int j = 0; j < joint_count(); ++j) pose.joints(j) = joints.angle(j, state_.mean(kRootDofs + j));
-  }
+  void write_pose(body::Pose& pose) const;
 
   body::BodyModel model_;
   MarkerMapping mapping_;
@@ -289,9 +154,250 @@ class Tracker {
   Eigen::VectorXd measurement_;
   ObservedMask observed_;
   FrameEstimate estimate_;
+  std::vector<std::pair<int, int>> axial_pairs_;  ///< joints (a, b) whose twists only add up
+  Eigen::VectorXd axial_gain_, axial_column_;     ///< scratch of split_axial_twists
+  std::vector<int> repeat_frames_;  ///< per used marker: frames its coordinates have repeated exactly
+  int frozen_frames_ = 0;           ///< frozen_marker_s in frames
   bool initialised_ = false;
   int frames_ = 0;
   int frames_since_start_ = 0;
 };
+
+// The definitions: inline here by default, or compiled once (compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options,
+                             double rate_hz, const SampleSet& samples)
+    : model_(std::move(model)),
+      mapping_(std::move(mapping)),
+      options_(validated(std::move(options), rate_hz)),
+      rate_hz_(rate_hz),
+      filter_(checked(samples, kRootDofs + model_.joint_count())),
+      measurement_model_(model_, body::OrientationParameterization::local_rotation_error),
+      mean_markers_model_(model_, body::OrientationParameterization::local_rotation_error) {
+  if (mapping_.point_of_marker.size() != static_cast<std::size_t>(model_.marker_count()))
+    throw std::invalid_argument("the marker mapping does not fit the body model");
+  for (int m = 0; m < model_.marker_count(); ++m)
+    if (mapping_.point_of_marker[m] >= 0) used_markers_.push_back(m);
+  if (used_markers_.empty()) throw std::invalid_argument("no recording label matches a marker of the model");
+  measurement_model_.select_markers(used_markers_);
+  const int n = state_dimension();
+  const double dt = 1.0 / rate_hz_;
+  process_noise_ = Eigen::MatrixXd::Zero(n, n);
+  process_noise_.diagonal().segment<3>(0).setConstant(std::pow(options_.position_speed_mm_per_s * dt, 2));
+  process_noise_.diagonal().segment<3>(3).setConstant(std::pow(options_.orientation_speed_rad_per_s * dt, 2));
+  process_noise_.diagonal().tail(joint_count()).setConstant(std::pow(options_.joint_speed_per_s * dt, 2));
+  const Eigen::Index m = 3 * static_cast<Eigen::Index>(used_markers_.size());
+  if (!options_.marker_noise_mm_per_marker.empty() &&
+      options_.marker_noise_mm_per_marker.size() != static_cast<std::size_t>(model_.marker_count()))
+    throw std::invalid_argument("one marker noise per model marker is needed (or none)");
+  noise_ = Eigen::MatrixXd::Zero(m, m);
+  for (std::size_t k = 0; k < used_markers_.size(); ++k) {
+    double sd = options_.marker_noise_mm;
+    if (!options_.marker_noise_mm_per_marker.empty() &&
+        !std::isnan(options_.marker_noise_mm_per_marker[static_cast<std::size_t>(used_markers_[k])]))
+      sd = options_.marker_noise_mm_per_marker[static_cast<std::size_t>(used_markers_[k])];
+    noise_.diagonal().segment<3>(3 * static_cast<Eigen::Index>(k)).setConstant(sd * sd);
+  }
+  measurement_ = Eigen::VectorXd::Constant(m, std::numeric_limits<double>::quiet_NaN());
+  observed_.resize(m);
+  repeat_frames_.assign(used_markers_.size(), 0);
+  if (options_.axial_split_sd_rad > 0) {
+    const std::vector<std::string> names = model_.joint_names();
+    const auto find = [&](const char* name) {
+      const auto at = std::find(names.begin(), names.end(), name);
+      return at == names.end() ? -1 : static_cast<int>(at - names.begin());
+    };
+    for (const auto& [a, b] : {std::pair{"BPz", "BTz"}, std::pair{"BLNz", "BUNz"}})
+      if (find(a) >= 0 && find(b) >= 0) axial_pairs_.emplace_back(find(a), find(b));
+    axial_gain_.resize(n);
+    axial_column_.resize(n);
+  }
+  frozen_frames_ = static_cast<int>(std::ceil(options_.frozen_marker_s * rate_hz_));
+  estimate_.rejection.assign(static_cast<std::size_t>(model_.marker_count()), MarkerRejection::none);
+  estimate_.marker_distance.resize(model_.marker_count());
+}
+
+S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points,
+                                                  const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
+  const auto start = std::chrono::steady_clock::now();
+  if (points.cols() != visible.size())
+    throw std::invalid_argument("process: one visibility flag per recording point is needed");
+  int count = 0, repeated = 0;
+  std::fill(estimate_.rejection.begin(), estimate_.rejection.end(), MarkerRejection::none);
+  estimate_.rejected_markers = 0;
+  for (std::size_t k = 0; k < used_markers_.size(); ++k) {
+    const int point = mapping_.point_of_marker[used_markers_[k]];
+    const bool seen = point < points.cols() && visible(point) && points.col(point).allFinite();
+    const bool same = seen && (measurement_.segment<3>(3 * k).array() == points.col(point).array()).all();
+    repeat_frames_[k] = same ? repeat_frames_[k] + 1 : 0;
+    for (int a = 0; a < 3; ++a) {
+      observed_(3 * k + a) = seen;
+      measurement_(3 * k + a) = seen ? points(a, point) : 0.0;
+    }
+    count += seen;
+    repeated += same;
+  }
+  estimate_.visible_markers = count;
+  // A stuck marker repeats its coordinates exactly; when most of the others moved this frame, a
+  // marker that has repeated for frozen_marker_s is left out (until it moves again).
+  if (frozen_frames_ > 0 && 2 * repeated < count)
+    for (std::size_t k = 0; k < used_markers_.size(); ++k)
+      if (repeat_frames_[k] >= frozen_frames_) {
+        observed_.segment<3>(3 * static_cast<Eigen::Index>(k)).setConstant(false);
+        estimate_.rejection[static_cast<std::size_t>(used_markers_[k])] = MarkerRejection::frozen;
+        ++estimate_.rejected_markers;
+        --count;
+      }
+  ++frames_;
+  if (!initialised_) {
+    if (count >= options_.min_markers_to_start) initialise(points);
+    if (!initialised_) {
+      estimate_.tracked = false;
+      estimate_.status = FilterStatus::nothing_observed;
+      finish(points, visible, start);
+      return estimate_;
+    }
+  } else {
+    filter_.predict_random_walk(state_, process_noise_);
+  }
+  UpdateOptions update_options;
+  update_options.gate_probability = options_.gate_probability;
+  if (frames_since_start_ <= options_.converging_frames)
+    update_options.iterations =
+        frames_since_start_ == 0 ? options_.initial_iterations : options_.converging_iterations;
+  else
+    update_options.block_gate_probability = options_.marker_gate_probability;  // once converged
+  update_options.block_size = 3;
+  ++frames_since_start_;
+  estimate_.status = FilterStatus::nothing_observed;
+  estimate_.nis = std::numeric_limits<double>::quiet_NaN();
+  if (count > 0) {
+    measurement_model_.set_reference_orientation(reference_rotation_);
+    const UpdateResult result =
+        filter_.update(state_, measurement_model_, measurement_, noise_, observed_, update_options);
+    estimate_.status = result.status;
+    estimate_.nis = result.nis;
+    for (const Eigen::Index block : filter_.rejected_blocks()) {
+      estimate_.rejection[static_cast<std::size_t>(used_markers_[static_cast<std::size_t>(block)])] =
+          MarkerRejection::innovation;
+      ++estimate_.rejected_markers;
+    }
+    if (result.ok()) recentre();
+  }
+  split_axial_twists();
+  estimate_.tracked = true;
+  finish(points, visible, start);
+  return estimate_;
+}
+
+S2KF_INLINE void Tracker::split_axial_twists() {
+  const double variance = options_.axial_split_sd_rad * options_.axial_split_sd_rad;
+  for (const auto& [a, b] : axial_pairs_) {
+    const Eigen::Index ia = kRootDofs + a, ib = kRootDofs + b;
+    const body::Joint &ja = model_.joints[static_cast<std::size_t>(a)],
+                      &jb = model_.joints[static_cast<std::size_t>(b)];
+    const double half_a = 0.5 * (ja.upper - ja.lower), half_b = 0.5 * (jb.upper - jb.lower);
+    const double ta = state_.mean(ia), tb = state_.mean(ib);
+    // theta = mid + half sin(Theta): h = theta_a - theta_b, H = [half_a cos Theta_a, -half_b cos Theta_b].
+    const double ha = half_a * std::cos(ta), hb = -half_b * std::cos(tb);
+    const double residual = -(0.5 * (ja.upper + ja.lower) + half_a * std::sin(ta) -
+                              0.5 * (jb.upper + jb.lower) - half_b * std::sin(tb));
+    axial_column_.noalias() = ha * state_.covariance.col(ia) + hb * state_.covariance.col(ib);  // C H^T
+    const double innovation_variance = ha * axial_column_(ia) + hb * axial_column_(ib) + variance;
+    axial_gain_ = axial_column_ / innovation_variance;
+    state_.mean.noalias() += residual * axial_gain_;
+    state_.covariance.noalias() -= axial_gain_ * axial_column_.transpose();
+  }
+}
+
+S2KF_INLINE void Tracker::initialise(const Eigen::Matrix3Xd& points) {
+  const int n = state_dimension();
+  state_.mean = Eigen::VectorXd::Zero(n);
+  state_.covariance = Eigen::MatrixXd::Zero(n, n);
+  Eigen::Matrix3Xd measured(3, estimate_.visible_markers), reference(3, estimate_.visible_markers);
+  const Eigen::Matrix3Xd zero_pose = body::marker_positions(model_, body::zero_pose(model_));
+  int k = 0;
+  for (std::size_t u = 0; u < used_markers_.size(); ++u) {
+    if (!observed_(3 * u)) continue;
+    measured.col(k) = points.col(mapping_.point_of_marker[used_markers_[u]]);
+    reference.col(k) = zero_pose.col(used_markers_[u]);
+    ++k;
+  }
+  const Eigen::Vector3d centroid = measured.rowwise().mean();
+  reference_rotation_.setIdentity();
+  Eigen::Vector3d position = centroid;
+  if (options_.rigid_initialisation) {
+    const RigidTransform fit = fit_rigid_transform(reference, measured);
+    reference_rotation_ = fit.rotation;
+    position = fit.translation;
+  }
+  state_.mean.head<3>() = position;
+  state_.covariance.diagonal().head<3>().setConstant(std::pow(options_.initial_position_sd_mm, 2));
+  if (!options_.rigid_initialisation) {
+    // The paper: C_r is the sample covariance of the first frame's markers.
+    const Eigen::Matrix3Xd centred = measured.colwise() - centroid;
+    state_.covariance.topLeftCorner<3, 3>() =
+        centred * centred.transpose() / std::max<Eigen::Index>(1, k - 1);
+  }
+  state_.covariance.diagonal().segment<3>(3).setConstant(std::pow(options_.initial_orientation_sd_rad, 2));
+  // Joints: the paper starts every joint at mid-range (Theta = 0); the default starts at the
+  // zero pose (standing) but keeps a joint whose zero lies on a limit a little inside it, where
+  // sin still has slope, so the filter can move it.
+  if (options_.joints_start_near_zero_pose) {
+    for (int j = 0; j < joint_count(); ++j) {
+      const double lower = model_.joints[j].lower, upper = model_.joints[j].upper;
+      if (upper <= lower) continue;
+      const double normalised =
+          std::clamp((0.0 - 0.5 * (upper + lower)) / (0.5 * (upper - lower)), -0.8, 0.8);
+      state_.mean(kRootDofs + j) = std::asin(normalised);
+    }
+  }
+  state_.covariance.diagonal().tail(joint_count()).setConstant(std::pow(options_.initial_joint_sd, 2));
+  initialised_ = true;
+  frames_since_start_ = 0;
+}
+
+S2KF_INLINE void Tracker::finish(const Eigen::Matrix3Xd& points,
+                                 const Eigen::Array<bool, Eigen::Dynamic, 1>& visible,
+                                 std::chrono::steady_clock::time_point start) {
+  estimate_.marker_distance.setConstant(std::numeric_limits<double>::quiet_NaN());
+  estimate_.mean_marker_distance = std::numeric_limits<double>::quiet_NaN();
+  if (estimate_.tracked) {
+    estimate_.root_rotation = reference_rotation_;
+    measurement_model_.set_reference_orientation(reference_rotation_);
+    write_pose(estimate_.pose);
+    estimate_.covariance = state_.covariance;  // same size every frame: no allocation
+    // Every model marker at the mean, through the batched model (allocation-free after its
+    // first call); it equals marker_positions(model_, pose) to rounding.
+    const Eigen::Index markers = model_.marker_count();
+    if (estimate_.predicted_markers.cols() != markers) estimate_.predicted_markers.resize(3, markers);
+    mean_markers_model_.set_reference_orientation(reference_rotation_);
+    mean_markers_model_(state_.mean,
+                        Eigen::Map<Eigen::MatrixXd>(estimate_.predicted_markers.data(), 3 * markers, 1));
+    double sum = 0;
+    int count = 0;
+    for (int m = 0; m < model_.marker_count(); ++m) {
+      const int point = mapping_.point_of_marker[m];
+      if (point < 0 || point >= points.cols() || !visible(point) || !points.col(point).allFinite()) continue;
+      const double d = (points.col(point) - estimate_.predicted_markers.col(m)).norm();
+      estimate_.marker_distance(m) = d;
+      sum += d;
+      ++count;
+    }
+    if (count > 0) estimate_.mean_marker_distance = sum / count;
+  }
+  estimate_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+S2KF_INLINE void Tracker::write_pose(body::Pose& pose) const {
+  pose.root_position = state_.mean.head<3>();
+  pose.root_rpy = body::rpy_from_rotation(measurement_model_.root_rotation(state_.mean.segment<3>(3)));
+  const body::BoundedJoints& joints = measurement_model_.bounded_joints();
+  if (pose.joints.size() != joint_count()) pose.joints.resize(joint_count());
+  for (int j = 0; j < joint_count(); ++j) pose.joints(j) = joints.angle(j, state_.mean(kRootDofs + j));
+}
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

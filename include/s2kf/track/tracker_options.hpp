@@ -37,6 +37,20 @@ struct TrackerOptions {
 
   double gate_probability = 0;  ///< 0: off; else reject a whole frame whose NIS is beyond this quantile
 
+  /// Per-marker gate: a marker whose innovation is beyond this chi-square quantile (3 degrees of
+  /// freedom) of its predicted covariance is left out of the frame's update, so a mislabelled,
+  /// swapped or jumping marker does not pull the pose (FrameEstimate::rejected_markers); 0: off.
+  double marker_gate_probability = 0.99999;
+  /// A marker whose coordinates repeat exactly for this long (s) while the body moves is stuck (a
+  /// real marker's coordinates always carry some noise) and is left out until it moves; 0: off.
+  double frozen_marker_s = 0.1;
+
+  /// Two stacked twists of the spine (BPz, BTz) and of the neck (BLNz, BUNz) are seen by the
+  /// markers only through their sum; each frame a pseudo-measurement that the two angles are equal,
+  /// with this SD (rad), splits the sum evenly, so the answer is unique and smooth instead of
+  /// wandering along the unseen difference; 0: off.
+  double axial_split_sd_rad = 0.05;
+
   /// Initialise the root pose by a rigid fit of the first frame's markers to the model (true), or
   /// as the paper does: position = mean of the markers, orientation = 0 (false).
   bool rigid_initialisation = true;
@@ -64,6 +78,12 @@ struct TrackerOptions {
       throw std::invalid_argument("initial standard deviations must be positive");
     if (!(gate_probability >= 0 && gate_probability < 1))
       throw std::invalid_argument("the gate probability must be in [0, 1)");
+    if (!(marker_gate_probability >= 0 && marker_gate_probability < 1))
+      throw std::invalid_argument("the marker gate probability must be in [0, 1)");
+    if (!(axial_split_sd_rad >= 0 && std::isfinite(axial_split_sd_rad)))
+      throw std::invalid_argument("the axial-split SD must be a non-negative number of radians");
+    if (!(frozen_marker_s >= 0 && std::isfinite(frozen_marker_s)))
+      throw std::invalid_argument("the frozen-marker time must be a non-negative number of seconds");
   }
 };
 
@@ -87,6 +107,9 @@ inline TrackerOptions paper_preset(double rate_hz) {
   o.initial_iterations = 1;
   o.converging_frames = 0;
   o.converging_iterations = 1;
+  o.marker_gate_probability = 0;  // the paper has no per-marker gate
+  o.frozen_marker_s = 0;
+  o.axial_split_sd_rad = 0;
   return o;
 }
 

@@ -26,6 +26,9 @@ struct TrackingRun {
   std::vector<double> seconds;                      ///< processing time per frame
   std::vector<Eigen::Matrix3Xd> predicted_markers;  ///< only when asked for (evaluation)
   std::vector<std::string> warnings;
+  /// Per model marker: frames in which the tracker left the marker out although the recording
+  /// showed it, by reason (MarkerRejection: innovation, frozen); empty for the baseline.
+  std::vector<long> rejected_by_innovation, rejected_as_frozen;
   long frames = 0;  ///< frames processed (rows produced), with or without a sink
   long frames_tracked = 0;
 };
@@ -44,6 +47,20 @@ struct TrackedFrame {
 };
 
 using FrameSink = std::function<void(const TrackedFrame&)>;
+
+/// Adds a frame's left-out markers to the run's counts (the baseline reports none: its rejection
+/// list is empty).
+inline void count_rejections(const FrameEstimate& e, TrackingRun& run) {
+  if (run.rejected_by_innovation.size() != e.rejection.size()) {
+    run.rejected_by_innovation.assign(e.rejection.size(), 0);
+    run.rejected_as_frozen.assign(e.rejection.size(), 0);
+  }
+  if (e.rejected_markers == 0) return;
+  for (std::size_t m = 0; m < e.rejection.size(); ++m) {
+    run.rejected_by_innovation[m] += e.rejection[m] == MarkerRejection::innovation;
+    run.rejected_as_frozen[m] += e.rejection[m] == MarkerRejection::frozen;
+  }
+}
 
 /// Feeds frames from next_frame(frame) -> bool (false at the end) into tracker.process(), frame
 /// times from `rate_hz`. `on_frame(index)` is called after each frame (progress, pacing). Updates
@@ -85,6 +102,7 @@ TrackingRun run_tracking(FrameTracker& tracker, NextFrame&& next_frame, double r
     run.mean_marker_distance.push_back(e.mean_marker_distance);
     run.seconds.push_back(e.seconds);
     if (keep_predicted_markers) run.predicted_markers.push_back(e.predicted_markers);
+    count_rejections(e, run);
     if (e.tracked && e.status != FilterStatus::ok && e.status != FilterStatus::nothing_observed) {
       auto& [count, first] = failures.try_emplace(to_string(e.status), 0L, frame.index).first->second;
       ++count;

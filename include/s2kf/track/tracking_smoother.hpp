@@ -6,6 +6,7 @@
 
 #include <s2kf/body/bounded_joints.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/core/rts_smoother.hpp>
 #include <s2kf/io/motion_files.hpp>
@@ -44,24 +45,7 @@ class TrackingSmoother {
 
   /// Replaces the rows of the recorded frames in `motion` (root position, roll/pitch/yaw, joint
   /// angles) by the smoothed poses.
-  void smooth(io::MotionTable& motion) const {
-    const std::vector<GaussianXd> smoothed = rts_smooth_random_walk(
-        states_, process_noise_, [this](std::size_t k, Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) {
-          to_chart_of(k, mean, covariance);
-        });
-    const Eigen::Index joints = joints_.size();
-    for (std::size_t k = 0; k < smoothed.size(); ++k) {
-      const Eigen::VectorXd& m = smoothed[k].mean;
-      const Eigen::Index row = rows_[k];
-      if (row < 0 || row >= motion.values.rows() || motion.values.cols() != 6 + joints)
-        throw std::invalid_argument(
-            "TrackingSmoother::smooth: the motion table does not hold the recorded frames");
-      motion.values.row(row).head<3>() = m.head<3>().transpose();
-      motion.values.row(row).segment<3>(3) =
-          body::rpy_from_rotation(chart_rotation(references_[k], m.segment<3>(3))).transpose();
-      motion.values.row(row).tail(joints) = joints_.angles(m.tail(joints)).transpose();
-    }
-  }
+  void smooth(io::MotionTable& motion) const;
 
  private:
   /// Step k+1's chart differs from step k's by the tracker's re-centring (state_chart.hpp).
@@ -75,5 +59,26 @@ class TrackingSmoother {
   std::vector<Eigen::Matrix3d> references_;
   std::vector<Eigen::Index> rows_;
 };
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE void TrackingSmoother::smooth(io::MotionTable& motion) const {
+  const std::vector<GaussianXd> smoothed = rts_smooth_random_walk(
+      states_, process_noise_, [this](std::size_t k, Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) {
+        to_chart_of(k, mean, covariance);
+      });
+  const Eigen::Index joints = joints_.size();
+  for (std::size_t k = 0; k < smoothed.size(); ++k) {
+    const Eigen::VectorXd& m = smoothed[k].mean;
+    const Eigen::Index row = rows_[k];
+    if (row < 0 || row >= motion.values.rows() || motion.values.cols() != 6 + joints)
+      throw std::invalid_argument(
+          "TrackingSmoother::smooth: the motion table does not hold the recorded frames");
+    motion.values.row(row).head<3>() = m.head<3>().transpose();
+    motion.values.row(row).segment<3>(3) =
+        body::rpy_from_rotation(chart_rotation(references_[k], m.segment<3>(3))).transpose();
+    motion.values.row(row).tail(joints) = joints_.angles(m.tail(joints)).transpose();
+  }
+}
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

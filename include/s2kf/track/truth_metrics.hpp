@@ -7,6 +7,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/motion_files.hpp>
 
@@ -40,8 +41,12 @@ inline body::Pose pose_of_row(const io::MotionTable& motion, Eigen::Index row) {
 
 /// Compares frame by frame (rows with the same index) from `warmup` on. The joint columns of both
 /// tables must match the model's joints. Segments are the frames markers ride on.
-inline TruthComparison compare_with_truth(const body::BodyModel& model, const io::MotionTable& estimate,
-                                          const io::MotionTable& truth, long warmup) {
+TruthComparison compare_with_truth(const body::BodyModel& model, const io::MotionTable& estimate,
+                                   const io::MotionTable& truth, long warmup);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE TruthComparison compare_with_truth(const body::BodyModel& model, const io::MotionTable& estimate,
+                                               const io::MotionTable& truth, long warmup) {
   if (estimate.joint_names != model.joint_names() || truth.joint_names != model.joint_names())
     throw std::invalid_argument("compare_with_truth: joint columns differ from the body model's");
   std::set<int> segment_frames;
@@ -102,5 +107,6 @@ inline TruthComparison compare_with_truth(const body::BodyModel& model, const io
     result.segment_rms_deg.emplace_back(model.frame_name(f), std::sqrt(per_segment_sq[f] / n) * degrees);
   return result;
 }
+#endif
 
 }  // namespace s2kf::track
