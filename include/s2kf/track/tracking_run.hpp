@@ -7,6 +7,7 @@
 
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <functional>
@@ -26,7 +27,8 @@ struct TrackingRun {
   std::vector<double> seconds;                      ///< processing time per frame
   std::vector<Eigen::Matrix3Xd> predicted_markers;  ///< only when asked for (evaluation)
   std::vector<std::string> warnings;
-  long frames = 0;  ///< frames processed (rows produced), with or without a sink
+  StageTimes times;  ///< read, tracking, smoothing and writing (the sink's): filled by run_session
+  long frames = 0;   ///< frames processed (rows produced), with or without a sink
   long frames_tracked = 0;
 };
 
