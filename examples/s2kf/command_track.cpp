@@ -10,10 +10,12 @@
 
 #include <s2kf/body/pose.hpp>
 #include <s2kf/io/atomic_file.hpp>
+#include <s2kf/io/c3d_error.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
 #include <s2kf/track/session.hpp>
+#include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
@@ -21,6 +23,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -28,9 +31,11 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 namespace s2kf::cli {
 namespace {
@@ -54,6 +59,9 @@ struct TrackSettings {
   bool realtime = false;
   bool quiet = false;
   int jobs = 0;
+  std::string shard;       // "I/N": track only the I-th of N parts of the recordings (0-based)
+  bool dry_run = false;    // list the recordings and their output prefixes, track nothing
+  bool verbose = false;    // also print the seconds per stage
   bool html = false;       // also write PREFIX.html, the interactive 3D page (s2kf view)
   OutputSettings outputs;  // --formats, --bvh-units, --derivatives (extra_outputs.hpp)
 };
@@ -108,12 +116,17 @@ nlohmann::json truth_json(const track::TruthComparison& accuracy) {
 /// output files; returns the summary and the paragraph to print.
 TrackOutcome track_file(const std::string& input, const std::string& prefix, const TrackSettings& settings,
                         bool show_progress) {
+  track::StageTimes outside;  // stages outside the session and the run: opening, finishing the files
+  auto stage_start = std::chrono::steady_clock::now();
   std::unique_ptr<c3d::C3dFrameSource> source;
   try {
     source = std::make_unique<c3d::C3dFrameSource>(input);
+  } catch (const c3d::C3dError& e) {
+    throw UserError(input + ": " + e.sentence());
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
+  outside.read = track::seconds_since(stage_start);
   const c3d::C3dInfo& info = source->info();
   // Ground truth, read before tracking so a wrong file fails fast.
   std::optional<io::MotionTable> truth;
@@ -198,10 +211,12 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   // as tracked (memory stays constant however long the recording is), or after the backward pass
   // with --smooth.
   const std::string name = fs::path(input).stem().string();
+  stage_start = std::chrono::steady_clock::now();
   io::MotionStreamWriter motion_files(motion_file_paths(prefix, settings.outputs), session.model, info.rate,
                                       name, bvh_units(settings.outputs));
   write_model_outputs(motion_files, settings.outputs, prefix, input, session.model,
                       session.mapping);  // .osim, .trc
+  outside.writing = track::seconds_since(stage_start);
   io::AtomicFileWriter marker_report(prefix + "_markers.csv");
   write_marker_report_header(marker_report.stream());
   std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
@@ -239,8 +254,10 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       warnings.push_back(problem);
   }
 
+  stage_start = std::chrono::steady_clock::now();
   motion_files.finish();
   marker_report.commit();
+  outside.writing += track::seconds_since(stage_start);
   // Accuracy against the truth, from the motion as written (frames from the 20th on).
   std::optional<track::TruthComparison> accuracy;
   if (truth) {
@@ -251,8 +268,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       throw UserError("--truth: " + settings.truth + ": " + e.what());
     }
   }
-  nlohmann::json summary =
-      track_summary(input, settings.method, choice, messages, session, run, settings.smooth, warnings);
+  nlohmann::json summary = track_summary(input, settings.method, choice, messages, session, run,
+                                         settings.smooth, warnings, outside);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
   if (accuracy) summary["truth"] = truth_json(*accuracy);
   io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
@@ -304,30 +321,92 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (settings.html) paragraph << ", the 3D page " << prefix << ".html";
   if (!figure_file.empty()) paragraph << ", and the figure " << figure_file;
   paragraph << ".";
+  if (settings.verbose) {
+    const track::StageTimes times = session.times + run.times + outside;  // as in the summary
+    paragraph << "\nSeconds per stage:";
+    for (const auto& [stage, seconds] : track::stage_list(times))
+      paragraph << " " << stage << " " << format(seconds, 3) << (stage == "writing" ? "" : ",");
+    paragraph << " (" << format(times.sum(), 3) << " in all).";
+  }
   return {summary, paragraph.str()};
 }
 
-/// Expands directories into their .c3d files (sorted), keeps files as given.
-std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
-  std::vector<std::string> files;
+/// A recording to track and the name of its outputs: its path below the folder it was found in,
+/// without the extension ("S01/Walk01"), or its file name for a file given as such.
+struct Recording {
+  std::string input;
+  std::string name;
+};
+
+bool is_c3d_file(const fs::directory_entry& entry) {
+  std::string ext = entry.path().extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".c3d" && entry.is_regular_file();
+}
+
+/// The recordings of the command line: every .c3d file in a folder, at any depth, named by its path
+/// below that folder (so outputs mirror the folders and same-named takes of different subjects
+/// stay apart), and every file given as such, named after itself. Sorted by name: the order
+/// --shard deals out, the same on every machine wherever the data are mounted.
+std::vector<Recording> find_recordings(const std::vector<std::string>& inputs) {
+  std::vector<Recording> recordings;
   for (const std::string& input : inputs) {
     if (fs::is_directory(input)) {
-      std::vector<std::string> found;
-      for (const auto& entry : fs::directory_iterator(input)) {
-        std::string ext = entry.path().extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-        if (entry.is_regular_file() && ext == ".c3d") found.push_back(entry.path().string());
-      }
-      if (found.empty()) throw UserError(input + " is a directory without .c3d files");
-      std::sort(found.begin(), found.end());
-      files.insert(files.end(), found.begin(), found.end());
+      std::size_t found = 0;
+      for (const auto& entry :
+           fs::recursive_directory_iterator(input, fs::directory_options::skip_permission_denied))
+        if (is_c3d_file(entry)) {
+          recordings.push_back({entry.path().string(),
+                                entry.path().lexically_relative(input).replace_extension().generic_string()});
+          ++found;
+        }
+      if (found == 0)
+        throw UserError(input + " is a folder without .c3d files (its subfolders searched too)");
     } else if (!fs::exists(input)) {
       throw UserError(input + ": no such file");
     } else {
-      files.push_back(input);
+      recordings.push_back({input, fs::path(input).stem().string()});
     }
   }
-  return files;
+  std::sort(recordings.begin(), recordings.end(), [](const Recording& a, const Recording& b) {
+    return std::tie(a.name, a.input) < std::tie(b.name, b.input);
+  });
+  return recordings;
+}
+
+/// --shard I/N: the recordings whose place in the sorted list is I modulo N (I from 0 to N-1), so N
+/// runs with I = 0..N-1 track every recording exactly once, in parts that differ by one at most.
+std::vector<Recording> shard_of(const std::vector<Recording>& recordings, const std::string& shard) {
+  const auto slash = shard.find('/');
+  const auto whole_number = [](const std::string& text) {
+    return !text.empty() && text.size() <= 9 && text.find_first_not_of("0123456789") == std::string::npos;
+  };
+  if (slash == std::string::npos || !whole_number(shard.substr(0, slash)) ||
+      !whole_number(shard.substr(slash + 1)))
+    throw UserError("--shard " + shard + ": expected I/N with whole numbers 0 <= I < N, e.g. --shard 0/8");
+  const std::size_t index = std::stoul(shard.substr(0, slash)), count = std::stoul(shard.substr(slash + 1));
+  if (count == 0 || index >= count)
+    throw UserError("--shard " + shard + ": I counts from 0 and must be smaller than N (the shards of N = " +
+                    std::to_string(count) + " are 0/" + std::to_string(count) + " to " +
+                    std::to_string(count == 0 ? 0 : count - 1) + "/" + std::to_string(count) + ")");
+  std::vector<Recording> part;
+  for (std::size_t k = index; k < recordings.size(); k += count) part.push_back(recordings[k]);
+  return part;
+}
+
+/// An error of one recording in a batch as one line that starts with the recording's path.
+std::string error_naming_file(const std::string& input, const std::exception& error) {
+  if (const auto* c3d_error = dynamic_cast<const c3d::C3dError*>(&error))
+    return input + ": " + c3d_error->sentence();
+  const std::string what = error.what();
+  return what.rfind(input, 0) == 0 ? what : input + ": " + what;
+}
+
+/// In place of the summary of a recording that failed in a batch: PREFIX.json with its error, which
+/// s2kf summarize lists. Outputs an earlier run left under the prefix stay as they were.
+void record_failure(const std::string& input, const std::string& prefix, const std::string& error) {
+  const nlohmann::json record = {{"input", input}, {"status", "failed"}, {"error", error}};
+  io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << record.dump(2) << "\n"; });
 }
 
 void run_track(const TrackSettings& settings) {
@@ -335,47 +414,94 @@ void run_track(const TrackSettings& settings) {
     throw UserError("give --markerset or --subject, not both (a subject file is a calibrated marker set)");
   if (settings.smooth && settings.method != "s2kf")
     throw UserError("--smooth works on the S2KF's estimates; it cannot be combined with --method baseline");
-  const std::vector<std::string> files = expand_inputs(settings.inputs);
-  const bool batch = files.size() > 1;
-  if (batch && !settings.truth.empty())
+  const std::vector<Recording> recordings = find_recordings(settings.inputs);
+  const bool batch = recordings.size() > 1 || !settings.shard.empty() ||
+                     std::any_of(settings.inputs.begin(), settings.inputs.end(),
+                                 [](const std::string& input) { return fs::is_directory(input); });
+  if (recordings.size() > 1 && !settings.truth.empty())
     throw UserError("--truth belongs to one recording; track that recording on its own");
-  const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
-  check_outputs(settings.outputs, output_prefixes(files, settings.out), !settings.truth.empty());
+  const std::vector<Recording> todo =
+      settings.shard.empty() ? recordings : shard_of(recordings, settings.shard);
+  // --out is a folder for a batch, and for one recording when it is one or ends in '/'; else the
+  // prefix of the one recording's files.
+  const bool out_is_folder =
+      batch || (!settings.out.empty() && (settings.out.back() == '/' || fs::is_directory(settings.out)));
+  std::vector<std::string> prefixes;
+  for (const Recording& recording : todo)
+    prefixes.push_back(out_is_folder
+                           ? (fs::path(settings.out.empty() ? "." : settings.out) / recording.name).string()
+                       : settings.out.empty() ? recording.name
+                                              : settings.out);
+  check_outputs(settings.outputs, prefixes, !settings.truth.empty());
+  if (settings.dry_run || todo.empty()) {
+    if (todo.empty() && !settings.quiet)
+      std::cout << "shard " << settings.shard << " holds none of the " << recordings.size()
+                << " recordings\n";
+    for (std::size_t i = 0; i < todo.size(); ++i) std::cout << todo[i].input << " -> " << prefixes[i] << "\n";
+    return;
+  }
   if (!batch) {
-    const std::string prefix = settings.out.empty() ? fs::path(files[0]).stem().string() : settings.out;
-    if (fs::path(prefix).has_parent_path()) fs::create_directories(fs::path(prefix).parent_path());
-    const TrackOutcome outcome = track_file(files[0], prefix, settings, terminal);
+    if (fs::path(prefixes[0]).has_parent_path()) fs::create_directories(fs::path(prefixes[0]).parent_path());
+    const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
+    const TrackOutcome outcome = track_file(todo[0].input, prefixes[0], settings, terminal);
     if (!settings.quiet) std::cout << outcome.paragraph << "\n";
     return;
   }
-  // Many recordings: one per thread, outputs in the --out directory named after each recording.
-  const fs::path directory = settings.out.empty() ? fs::path(".") : fs::path(settings.out);
-  fs::create_directories(directory);
+  // A batch: one recording per thread. A recording that fails is reported (its line names it, its
+  // PREFIX.json records why) and the others go on; the exit status says that some failed.
   const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
   const unsigned jobs = settings.jobs > 0 ? static_cast<unsigned>(settings.jobs) : hardware;
+  // Largest files first: a long recording started last would leave the other threads idle at the
+  // end. (Were times proportional to sizes, longest-first would stay within 4/3 of the best order.)
+  std::vector<std::uintmax_t> bytes;
+  for (const Recording& recording : todo) {
+    std::error_code error;
+    const std::uintmax_t size = fs::file_size(recording.input, error);
+    bytes.push_back(error ? 0 : size);
+  }
+  std::vector<std::size_t> order(todo.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return bytes[a] > bytes[b]; });
   std::atomic<std::size_t> next{0};
   std::mutex print;
   std::vector<std::string> failures;
   auto worker = [&]() {
-    for (std::size_t i; (i = next++) < files.size();) {
-      const std::string prefix = (directory / fs::path(files[i]).stem()).string();
+    for (std::size_t n; (n = next++) < todo.size();) {
+      const std::size_t i = order[n];
+      const std::string& input = todo[i].input;
       try {
-        const TrackOutcome outcome = track_file(files[i], prefix, settings, false);
+        fs::create_directories(fs::path(prefixes[i]).parent_path());
+        const TrackOutcome outcome = track_file(input, prefixes[i], settings, false);
         std::lock_guard<std::mutex> lock(print);
-        if (!settings.quiet) std::cout << outcome.paragraph << "\n\n";
+        if (!settings.quiet) std::cout << outcome.paragraph << "\n\n" << std::flush;
       } catch (const std::exception& e) {
+        const std::string message = error_naming_file(input, e);
+        std::string unrecorded;
+        try {
+          record_failure(input, prefixes[i], message);
+        } catch (const std::exception& f) {
+          unrecorded = error_naming_file(input, f);
+        }
         std::lock_guard<std::mutex> lock(print);
-        failures.push_back(e.what());
-        std::cerr << "s2kf: " << e.what() << "\n";
+        failures.push_back(input);
+        std::cerr << "s2kf: " << message << "\n";
+        if (!unrecorded.empty()) std::cerr << "s2kf: " << unrecorded << "\n";
       }
     }
   };
   std::vector<std::thread> threads;
-  for (unsigned t = 0; t < std::min<std::size_t>(jobs, files.size()); ++t) threads.emplace_back(worker);
+  for (unsigned t = 0; t < std::min<std::size_t>(jobs, todo.size()); ++t) threads.emplace_back(worker);
   for (auto& thread : threads) thread.join();
-  if (!failures.empty())
-    throw UserError(std::to_string(failures.size()) + " of " + std::to_string(files.size()) +
-                    " recordings could not be tracked (see above)");
+  if (failures.empty()) return;
+  std::sort(failures.begin(), failures.end());
+  constexpr std::size_t kNamed = 10;  // a failure list longer than this ends in "and N more"
+  std::string list;
+  for (std::size_t i = 0; i < std::min(kNamed, failures.size()); ++i) list += (i ? ", " : "") + failures[i];
+  if (failures.size() > kNamed) list += " and " + std::to_string(failures.size() - kNamed) + " more";
+  throw UserError(std::to_string(failures.size()) + " of " + std::to_string(todo.size()) +
+                  " recordings could not be tracked: " + list +
+                  " (errors above and in each one's .json; the others were tracked)");
 }
 
 const RegisterCommand track_registration{
@@ -383,7 +509,8 @@ const RegisterCommand track_registration{
       auto settings = std::make_shared<TrackSettings>();
       app.add_option("recordings", settings->inputs, "C3D files or directories of them")->required();
       app.add_option("--out", settings->out,
-                     "output prefix (one recording; default: its name) or directory (several)");
+                     "output folder (several recordings, or ending in / or an existing folder: outputs "
+                     "mirror the input's subfolders), else the prefix of one recording (default: its name)");
       app.add_option("--height", settings->height_mm,
                      "subject height in mm (default: estimated from rigid marker pairs)")
           ->check(CLI::Range(300.0, 3000.0));
@@ -419,6 +546,12 @@ const RegisterCommand track_registration{
       add_output_options(app, settings->outputs);
       app.add_option("--jobs", settings->jobs, "recordings tracked at once (default: all cores)")
           ->check(CLI::Range(1, 1024));
+      app.add_option("--shard", settings->shard,
+                     "I/N: track only every N-th recording of the sorted list, from the I-th (0-based): "
+                     "N runs with I = 0..N-1 track each recording once (Slurm job arrays, GNU parallel)");
+      app.add_flag("--dry-run", settings->dry_run,
+                   "print each recording this run would track and its output prefix; track nothing");
+      app.add_flag("--verbose", settings->verbose, "also print the seconds each stage took");
       app.callback([settings] { run_track(*settings); });
     }};
 

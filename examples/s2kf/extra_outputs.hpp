@@ -88,8 +88,9 @@ inline std::vector<std::string> output_files(const std::string& prefix, const Ou
 }
 
 /// Refuses, before anything is tracked, what would end in a partial or clobbered result: --truth
-/// without the CSV it is compared from, two recordings that would write the same files (same name
-/// in different folders), an output name that is a directory, a folder that cannot be written.
+/// without the CSV it is compared from, two recordings that would write the same files (files of one
+/// name from different folders, given one by one), an output name that is a directory, a folder
+/// that cannot be written.
 inline void check_outputs(const OutputSettings& settings, const std::vector<std::string>& prefixes,
                           bool with_truth) {
   namespace fs = std::filesystem;
@@ -100,30 +101,17 @@ inline void check_outputs(const OutputSettings& settings, const std::vector<std:
     const auto [at, inserted] = owner.emplace(fs::absolute(prefix).lexically_normal().string(), prefix);
     if (!inserted)
       throw UserError("two recordings would both write " + prefix +
-                      ".*; track them separately with different --out names");
+                      ".*; give the folder that holds both (outputs mirror its subfolders), or track them "
+                      "separately with different --out names");
     for (const std::string& file : output_files(prefix, settings))
       if (fs::is_directory(file)) throw UserError("cannot write " + file + ": it is a directory");
-    const fs::path folder =
-        fs::path(prefix).has_parent_path() ? fs::path(prefix).parent_path() : fs::path(".");
-    if (fs::exists(folder) && !fs::is_directory(folder))
-      throw UserError("cannot write into " + folder.string() + ": it is not a directory");
+    // Every folder on the way must be one (or not exist yet: it is made).
+    for (fs::path folder = fs::path(prefix).parent_path(); !folder.empty(); folder = folder.parent_path()) {
+      if (fs::exists(folder) && !fs::is_directory(folder))
+        throw UserError("cannot write into " + folder.string() + ": it is not a directory");
+      if (folder == folder.parent_path()) break;  // the root
+    }
   }
-}
-
-/// The output prefix of each recording, as `s2kf track` names them: `out` itself for one recording
-/// (default: its name), `out`/NAME for several.
-inline std::vector<std::string> output_prefixes(const std::vector<std::string>& recordings,
-                                                const std::string& out) {
-  namespace fs = std::filesystem;
-  std::vector<std::string> prefixes;
-  for (const std::string& recording : recordings) {
-    const std::string name = fs::path(recording).stem().string();
-    if (recordings.size() == 1)
-      prefixes.push_back(out.empty() ? name : out);
-    else
-      prefixes.push_back(((out.empty() ? fs::path(".") : fs::path(out)) / name).string());
-  }
-  return prefixes;
 }
 
 /// The model markers that see a point of the recording (those the .osim and .trc carry).

@@ -28,12 +28,15 @@ inline double summary_number(const nlohmann::json& value) {
 }
 
 /// The summary of `run` (a run of `session`): marker set and why, calibration, frames, height,
-/// markers, distances (after convergence and over all frames), latency and warnings. `method` is
-/// "s2kf" or "baseline"; the caller adds what only it knows (deadline misses, the truth).
+/// markers, distances (after convergence and over all frames), latency, seconds per stage and
+/// warnings. `method` is "s2kf" or "baseline"; `outside` is the time the caller spent on stages
+/// outside the session and the run (opening the file, finishing the outputs); the caller adds what
+/// only it knows (deadline misses, the truth).
 inline nlohmann::json track_summary(const std::string& input, const std::string& method,
                                     const MarkerSetChoice& choice, const std::vector<std::string>& messages,
                                     const track::Session& session, const track::TrackingRun& run,
-                                    bool smoothed, const std::vector<std::string>& warnings) {
+                                    bool smoothed, const std::vector<std::string>& warnings,
+                                    const track::StageTimes& outside = {}) {
   const long converged = track::converged_frame(run.mean_marker_distance);
   // The convergence rule restarts at any late frame above 1.5 times the final level, so on long
   // real recordings the mean over every tracked frame is reported as well.
@@ -58,6 +61,9 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
   std::vector<std::string> markers_used;
   for (int m = 0; m < session.model.marker_count(); ++m)
     if (session.mapping.point_of_marker[m] >= 0) markers_used.push_back(session.model.markers[m].name);
+  nlohmann::json seconds_per_stage = nlohmann::json::object();
+  for (const auto& [stage, seconds] : track::stage_list(session.times + run.times + outside))
+    seconds_per_stage[stage] = seconds;
   return {
       {"input", input},
       {"method", method},
@@ -80,6 +86,7 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
       {"mean_marker_distance_all_frames_mm", number_or_null(overall)},
       {"latency_ms",
        {{"median", track::quantile(latency_ms, 0.5)}, {"p99", track::quantile(latency_ms, 0.99)}}},
+      {"seconds_per_stage", seconds_per_stage},
       {"samples", method == "s2kf" ? nlohmann::json(session.tracker.samples) : nlohmann::json(nullptr)},
       {"warnings", warnings},
   };

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <istream>
 #include <limits>
@@ -207,6 +208,7 @@ class C3dReader {
  public:
   /// Opens `path`; throws C3dError if the file cannot be opened or is not a readable C3D file.
   explicit C3dReader(const std::string& path) : name_(path) {
+    if (std::filesystem::is_directory(path)) throw C3dError(path, -1, "a folder, not a C3D file");
     auto file = std::make_unique<std::ifstream>(path, std::ios::binary);
     if (!*file) throw C3dError(path, -1, "cannot open the file for reading");
     stream_ = std::move(file);

@@ -19,6 +19,7 @@
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/subject_calibration.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
@@ -29,6 +30,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -37,6 +39,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace s2kf::track {
@@ -79,6 +82,7 @@ struct Session {
   std::optional<SubjectCalibration> calibration;  ///< when calibrated
   std::int64_t calibration_frames = 0;            ///< frames the calibration used
   std::vector<std::string> warnings;              ///< the marker set's and the preparation's
+  StageTimes times;                               ///< read, height and calibration: the preparation's
 
   int markers_used() const { return mapping.markers_used(); }
 };
@@ -140,13 +144,22 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
         "only " + std::to_string(used) + " of its labels are markers of the marker set " + set.name +
         "; at least " + std::to_string(session.tracker.min_markers_to_start) + " are needed to track");
 
+  // The height estimate reads spread frames; its time is kept apart from theirs.
+  const auto estimate_height_timed = [&]() {
+    TimedFrameSource timed(source, session.times.read);
+    const double read_before = session.times.read;
+    const auto start = std::chrono::steady_clock::now();
+    std::optional<HeightEstimate> estimate = estimate_height(timed, model, session.mapping);
+    session.times.height = seconds_since(start) - (session.times.read - read_before);
+    return estimate;
+  };
   if (options.height_mm > 0) {
     session.height_mm = options.height_mm;
     session.height_source = "given";
   } else if (set.height_mm) {
     session.height_mm = *set.height_mm;
     session.height_source = "from the marker-set file";
-  } else if (const std::optional<HeightEstimate> estimate = estimate_height(source, model, session.mapping)) {
+  } else if (const std::optional<HeightEstimate> estimate = estimate_height_timed()) {
     session.height_mm = estimate->mm;
     session.height_source = "estimated from " + std::to_string(estimate->pairs) + " rigid marker pairs";
   } else if (options.fallback_height_mm > 0) {
@@ -169,9 +182,12 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
     calibration.marker_weight = calibration_weights(set, session.tracker.marker_noise_mm);
     session.calibration_frames = std::min<std::int64_t>(options.calibration_frames, source.frame_count());
     try {
-      const MarkerSequence frames = read_frames(source, 0, session.calibration_frames);
+      TimedFrameSource timed(source, session.times.read);
+      const MarkerSequence frames = read_frames(timed, 0, session.calibration_frames);
+      const auto start = std::chrono::steady_clock::now();
       session.calibration =
           calibrate_subject(session.model, session.mapping, session.tracker, frames, samples, calibration);
+      session.times.calibration = seconds_since(start);
       session.model = session.calibration->model;
     } catch (const std::invalid_argument& e) {
       if (!options.calibration_may_fail)
@@ -228,6 +244,7 @@ struct RunHooks {
 /// Runs a prepared session over every frame of `source`. A coordinate beyond a kilometre stops the
 /// run with std::invalid_argument (the file's units or scale are wrong). With a sink, memory stays
 /// constant in the recording's length (unless smoothing); TrackingRun keeps the per-frame series.
+/// TrackingRun::times has the seconds spent reading, tracking, smoothing and in the sink (writing).
 TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
                         const RunOptions& options = {}, const RunHooks& hooks = {});
 
@@ -236,10 +253,12 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
                                     const RunOptions& options, const RunHooks& hooks) {
   if (options.smooth && options.method != Method::s2kf)
     throw std::invalid_argument("smoothing works on the S2KF's estimates, not the baseline's");
+  StageTimes times;
+  TimedFrameSource timed_source(source, times.read);
   std::int64_t next = 0;
   std::string bad_coordinates;
   const auto next_frame = [&](MarkerFrame& frame) {
-    if (!source.read(next, frame)) return false;
+    if (!timed_source.read(next, frame)) return false;
     ++next;
     for (Eigen::Index p = 0; p < frame.positions.cols(); ++p)
       if (frame.visible(p) && frame.positions.col(p).cwiseAbs().maxCoeff() > kAbsurdCoordinateMm) {
@@ -252,36 +271,54 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
     if (hooks.on_read) hooks.on_read(frame);
     return true;
   };
+  FrameSink timed_sink;
+  if (hooks.sink)
+    timed_sink = [&](const TrackedFrame& frame) {
+      const auto start = std::chrono::steady_clock::now();
+      hooks.sink(frame);
+      times.writing += seconds_since(start);
+    };
+  // The tracking stage is the tracker's own time per frame (hooks and bookkeeping apart).
+  const auto with_times = [&](TrackingRun run) {
+    times.tracking = 0;
+    for (double seconds : run.seconds) times.tracking += seconds;
+    run.times = times;
+    return run;
+  };
   const std::vector<std::string> joint_names = session.model.joint_names();
   if (options.method == Method::baseline) {
     GradientBaseline baseline(session.model, session.mapping);
-    return run_tracking(baseline, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers,
-                        hooks.on_frame, hooks.sink);
+    return with_times(run_tracking(baseline, next_frame, session.rate_hz, joint_names,
+                                   options.keep_predicted_markers, hooks.on_frame, timed_sink));
   }
   Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
   if (!options.smooth) {
     TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
-                                   options.keep_predicted_markers, hooks.on_frame, hooks.sink);
+                                   options.keep_predicted_markers, hooks.on_frame, timed_sink);
     warn_about_rejected_markers(session.model, run);
-    return run;
+    return with_times(std::move(run));
   }
   TrackingSmoother smoother(tracker);
   const auto on_frame = [&](long index) {
+    const auto start = std::chrono::steady_clock::now();
     smoother.record(tracker, index);
+    times.smoothing += seconds_since(start);
     if (hooks.on_frame) hooks.on_frame(index);
   };
   TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
                                  options.keep_predicted_markers, on_frame);
+  const auto start = std::chrono::steady_clock::now();
   smoother.smooth(run.motion);
+  times.smoothing += seconds_since(start);
   warn_about_rejected_markers(session.model, run);
-  if (hooks.sink)
+  if (timed_sink)
     for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {
       const auto f = static_cast<std::size_t>(r);
       const Eigen::VectorXd values = run.motion.values.row(r).transpose();
-      hooks.sink(TrackedFrame{static_cast<long>(r), run.motion.frame[f], run.motion.time[f], values,
+      timed_sink(TrackedFrame{static_cast<long>(r), run.motion.frame[f], run.motion.time[f], values,
                               run.mean_marker_distance[f], run.visible_markers[f], nullptr});
     }
-  return run;
+  return with_times(std::move(run));
 }
 #endif
 

@@ -7,6 +7,7 @@
 
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <functional>
@@ -29,7 +30,8 @@ struct TrackingRun {
   /// Per model marker: frames in which the tracker left the marker out although the recording
   /// showed it, by reason (MarkerRejection: innovation, frozen); empty for the baseline.
   std::vector<long> rejected_by_innovation, rejected_as_frozen;
-  long frames = 0;  ///< frames processed (rows produced), with or without a sink
+  StageTimes times;  ///< read, tracking, smoothing and writing (the sink's): filled by run_session
+  long frames = 0;   ///< frames processed (rows produced), with or without a sink
   long frames_tracked = 0;
 };
 
