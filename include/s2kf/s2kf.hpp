@@ -14,6 +14,7 @@
 
 #include <s2kf/core/box_muller.hpp>
 #include <s2kf/core/chi_square.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/exponential_integral.hpp>
@@ -57,6 +58,7 @@
 #include <s2kf/track/marker_set_mapping.hpp>
 #include <s2kf/track/rigid_fit.hpp>
 #include <s2kf/track/session.hpp>
+#include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/state_chart.hpp>
 #include <s2kf/track/subject_calibration.hpp>
 #include <s2kf/track/tracker.hpp>

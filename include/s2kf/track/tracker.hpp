@@ -283,9 +283,11 @@ S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points
           MarkerRejection::innovation;
       ++estimate_.rejected_markers;
     }
-    if (result.ok()) recentre();
   }
+  // After the markers' update and before re-centring, which folds what the split moved (it moves
+  // correlated coordinates too, the orientation error among them) into the reference.
   split_axial_twists();
+  recentre();
   estimate_.tracked = true;
   finish(points, visible, start);
   return estimate_;
