@@ -107,7 +107,8 @@ Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& 
     return true;
   };
   result.run = track::run_tracking(tracker, next, recording.info.rate, model.joint_names(), true);
-  result.converged = track::converged_frame(result.run.mean_marker_distance);
+  result.converged = track::converged_frame(result.run.mean_marker_distance,
+                                            track::frames_per_second(recording.info.rate));
   result.level_mm = track::mean_from(result.run.mean_marker_distance, result.converged);
   result.truth = track::compare_with_truth(model, result.run.motion, truth, 10);
   return result;
@@ -130,10 +131,24 @@ TEST(MarkerMapping, StripsSubjectPrefixesMatchesCaseInsensitivelyAndReportsTheRe
   EXPECT_EQ(mapping.markers_used(), 3);
 }
 
-TEST(TrackingMetrics, ConvergedFrameIsTheFirstAfterWhichTheDistanceStaysNearItsFinalLevel) {
-  std::vector<double> series{500, 300, 100, 40, 12, 10, 11, 16, 10, 10, 9, 10};
-  // Final level: median of the second half = 10; within 1.5 x from frame 8 on (16 > 15 at frame 7).
-  EXPECT_EQ(track::converged_frame(series), 8);
+TEST(TrackingMetrics, ConvergedFrameIsWhereTheRunningMedianOverOneSecondFallsBelowOneAndAHalfMedians) {
+  // Median of all 12 = 11.5, threshold 17.25. Windows of 3 frames: from frame 2 {100, 40, 12}
+  // has median 40; from frame 3 {40, 12, 10} median 12 < 17.25, although frame 3 itself is 40.
+  const std::vector<double> series{500, 300, 100, 40, 12, 10, 11, 16, 10, 10, 9, 10};
+  EXPECT_EQ(track::converged_frame(series, 3), 3);
+  // A window of one frame is the frame itself: 12 at frame 4 is the first below 17.25.
+  EXPECT_EQ(track::converged_frame(series, 1), 4);
+  // A late fast phase (the old rule restarted there) does not move it; NaN frames are skipped.
+  std::vector<double> late = series;
+  late.insert(late.end(), {10, 10, 10, 10, 10, 10, 10, 10, 60, 70, 80, 10, NAN, 10});
+  EXPECT_EQ(track::converged_frame(late, 3), 3);
+  // Leading NaN frames: the first measured frame whose window qualifies.
+  EXPECT_EQ(track::converged_frame({NAN, NAN, 9, 10, 11}, 2), 2);
+  // Never below: a distance that only grows ends above 1.5 x its median in every window.
+  EXPECT_EQ(track::converged_frame({1, 2, 4, 8, 16, 32, 64}, 7, 0.1), -1);
+  EXPECT_EQ(track::converged_frame({NAN, NAN}, 3), -1);
+  EXPECT_EQ(track::frames_per_second(120.0), 120);
+  EXPECT_EQ(track::frames_per_second(0.0), 1);
   EXPECT_NEAR(track::quantile({1, 2, 3, 4}, 0.5), 2.5, 1e-12);
   EXPECT_NEAR(track::mean_from({1, NAN, 3}, 0), 2.0, 1e-12);
 }
