@@ -379,9 +379,9 @@ class C3dReader {
            " Hz and POINT:RATE gives none that is a positive number");
       info_.rate = 0.0;
     } else if (!plausible_frame_rate(info_.rate)) {
-      warn("the frame rate " + detail::format_number(info_.rate) + " Hz is implausible (motion capture runs at " +
-           detail::format_number(kPlausibleFrameRateHz[0]) + " to " + detail::format_number(kPlausibleFrameRateHz[1]) +
-           " Hz)");
+      warn("the frame rate " + detail::format_number(info_.rate) +
+           " Hz is implausible (motion capture runs at " + detail::format_number(kPlausibleFrameRateHz[0]) +
+           " to " + detail::format_number(kPlausibleFrameRateHz[1]) + " Hz)");
     }
 
     read_units();
@@ -459,8 +459,8 @@ class C3dReader {
         stop("an entry cut off by the end of the file");
         break;
       }
-      std::string name = upper_case(utf8_from_file_text(trim(
-          std::string_view(reinterpret_cast<const char*>(&bytes[q]), static_cast<std::size_t>(name_length)))));
+      std::string name = upper_case(utf8_from_file_text(trim(std::string_view(
+          reinterpret_cast<const char*>(&bytes[q]), static_cast<std::size_t>(name_length)))));
       q += name_length;
       const std::int64_t offset_position = q;
       const int offset = d.i16(&bytes[q]);
