@@ -319,7 +319,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     paragraph << ". Converged at frame " << converged << "; mean marker distance after that "
               << format(level, 1) << " mm (" << format(overall, 1) << " mm over all tracked frames)";
   else
-    paragraph << ". The marker distance never settled within 1.5 times its final level; mean "
+    paragraph << ". The marker distance never settled (its median over a second stayed above 1.5 times its "
+                 "median over the recording); mean "
               << format(overall, 1) << " mm over all tracked frames";
   paragraph << ". Latency per frame: median " << format(median_ms, 3) << " ms, p99 " << format(p99_ms, 3)
             << " ms";

@@ -256,7 +256,7 @@ inline OcclusionStudy occlusion_monte_carlo(const Session& setup, const MarkerSe
                      double& worst) {
       std::vector<double> distance;
       track_recording(setup, occluded, complete, method, options.samples, &distance);
-      levels.push_back(mean_from(distance, converged_frame(distance)));
+      levels.push_back(level_after_convergence(distance, frames_per_second(setup.rate_hz)));
       for (std::size_t k = static_cast<std::size_t>(std::max(0L, warmup)); k < distance.size(); ++k)
         if (std::isfinite(distance[k])) worst = std::max(worst, distance[k]);
       distances.push_back(std::move(distance));

@@ -56,4 +56,11 @@ inline double mean_from(const std::vector<double>& values, long from) {
   return count ? sum / static_cast<double>(count) : std::numeric_limits<double>::quiet_NaN();
 }
 
+/// The mean distance from converged_frame(distance, window) on: the level after convergence; NaN
+/// when the distance never converged.
+inline double level_after_convergence(const std::vector<double>& distance, long window) {
+  const long converged = converged_frame(distance, window);
+  return converged >= 0 ? mean_from(distance, converged) : std::numeric_limits<double>::quiet_NaN();
+}
+
 }  // namespace s2kf::track
