@@ -38,6 +38,14 @@ int main(int argc, char** argv) {
     CLI::App* sub = app.add_subcommand(command.name, command.description);
     command.setup(*sub);
   }
+  // CLI11 would call an unknown command a missing one ("A subcommand is required").
+  if (argc > 1 && argv[1][0] != '-' &&
+      std::none_of(commands.begin(), commands.end(), [&](const auto& c) { return c.name == argv[1]; })) {
+    std::string names;
+    for (const auto& command : commands) names += (names.empty() ? "" : ", ") + command.name;
+    std::cerr << "s2kf: there is no command " << argv[1] << " (the commands are " << names << ").\n";
+    return 1;
+  }
   s2kf::cli::install_interrupt_handlers();
   try {
     app.parse(argc, argv);
