@@ -221,18 +221,10 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   std::ostream& marker_report = motion_files.companion(prefix + "_markers.csv");
   write_marker_report_header(marker_report);
   std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
-  std::vector<double> rows;               // the motion as written, kept only to compare with --truth
-  io::MotionTable estimate;
-  estimate.joint_names = session.model.joint_names();
   hooks.sink = [&](const track::TrackedFrame& f) {
     throw_if_interrupted();
     motion_files.append(f.frame, f.time, f.values);
     write_marker_report_row(marker_report, f.frame, f.time, f.mean_marker_distance, f.visible_markers);
-    if (truth) {
-      estimate.frame.push_back(f.frame);
-      estimate.time.push_back(f.time);
-      rows.insert(rows.end(), f.values.data(), f.values.data() + f.values.size());
-    }
     if (f.frame == settings.figure_frame && io::is_tracked_row(f.values))
       figure_pose = body::pose_from_row(f.values);
   };
@@ -269,14 +261,13 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       warnings.push_back(problem);
   }
 
-  // Accuracy against the truth, from the motion as written (frames from the 20th on).
+  // Accuracy against the truth, from the motion as written (frames from the 20th on), read back
+  // before the set is committed.
   std::optional<track::TruthComparison> accuracy;
   if (truth) {
-    estimate.values =
-        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-            rows.data(), static_cast<Eigen::Index>(estimate.frame.size()), 6 + session.model.joint_count());
     try {
-      accuracy = track::compare_with_truth(session.model, estimate, *truth, kTruthWarmupFrames);
+      accuracy = track::compare_with_truth(session.model, io::load_motion_csv(motion_files.flushed_csv()),
+                                           *truth, kTruthWarmupFrames);
     } catch (const std::invalid_argument& e) {
       throw UserError("--truth: " + settings.truth + ": " + e.what());
     }
