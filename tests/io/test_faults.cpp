@@ -105,8 +105,8 @@ TEST(Faults, Latin1LabelsAreDecodedMatchedAndWrittenAsUtf8) {
   const std::string summary = read_text_file(dir + "/plain.json");
   EXPECT_TRUE(is_utf8(summary));
   EXPECT_NE(summary.find("\"" + utf8_label + "\""), std::string::npos) << summary;
-  for (const std::string& name : {"plain.csv", "plain.mot", "plain.bvh", "plain.trc", "plain_markers.csv"})
-    EXPECT_TRUE(fs::exists(dir + "/" + name)) << name;
+  for (const char* name : {"plain.csv", "plain.mot", "plain.bvh", "plain.trc", "plain_markers.csv"})
+    EXPECT_TRUE(fs::exists(dir + "/" + std::string(name))) << name;
 
   // A marker set that spells the label the same way matches it: no label is ignored.
   std::string set = read_text_file(std::string(S2KF_DATA_DIR) + "/markersets/kit.json");
