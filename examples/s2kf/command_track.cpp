@@ -118,11 +118,14 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   }
   const c3d::C3dInfo& info = source->info();
   // Everything that can be checked is checked before tracking: a late failure would waste the run.
-  if (info.rate > 0 && !c3d::plausible_frame_rate(info.rate))
-    throw UserError(input + ": the frame rate " + c3d::detail::format_number(info.rate) +
-                    " Hz in its header is not one motion capture runs at (" +
-                    c3d::detail::format_number(c3d::kPlausibleFrameRateHz[0]) + " to " +
-                    c3d::detail::format_number(c3d::kPlausibleFrameRateHz[1]) + " Hz); correct POINT:RATE");
+  if (!c3d::plausible_frame_rate(info.rate))  // the reader gives 0 for none that is a positive number
+    throw UserError(input + ": " +
+                    (info.rate > 0 ? "the frame rate " + c3d::detail::format_number(info.rate) +
+                                         " Hz in its header is not one motion capture runs at (" +
+                                         c3d::detail::format_number(c3d::kPlausibleFrameRateHz[0]) + " to " +
+                                         c3d::detail::format_number(c3d::kPlausibleFrameRateHz[1]) + " Hz)"
+                                   : std::string("no valid frame rate in its header or POINT:RATE")) +
+                    "; correct POINT:RATE");
   // Ground truth, read before tracking so a wrong file fails fast.
   std::optional<io::MotionTable> truth;
   if (!settings.truth.empty()) {
