@@ -166,8 +166,8 @@ std::string mutate(std::string v, const std::string& other, std::mt19937& rng) {
   const auto below = [&](std::size_t n) {
     return n == 0 ? std::size_t(0) : std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
   };
-  const std::size_t head = std::min<std::size_t>(v.size(), 512 * 12);
-  const auto offset = [&](std::size_t width) {
+  const auto offset = [&](std::size_t width) {  // v shrinks and grows as mutations stack up
+    const std::size_t head = std::min<std::size_t>(v.size(), 512 * 12);
     const std::size_t range = below(3) < 2 ? head : v.size();
     return range > width ? below(range - width + 1) : std::size_t(0);
   };

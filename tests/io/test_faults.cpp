@@ -17,6 +17,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -235,11 +236,12 @@ TEST(Faults, ImplausibleFrameRatesAreWarnedAboutAndRefused) {
 }
 
 TEST(Faults, CommandLineErrorsExitWithStatusOneAndOneSentence) {
+  expect_one_sentence(run_command("no-such-command"),
+                      "there is no command no-such-command (the commands are c3d, calibrate,");
   for (const std::string& arguments :
-       {std::string(""), std::string("no-such-command"), std::string("track"), std::string("c3d"),
-        "track " + kHandstand + " --height 10", "track " + kHandstand + " --samples many",
-        "track " + kHandstand + " --no-such-option", "track " + kHandstand + " --method kalman",
-        "c3d " + kHandstand + " --frames"}) {
+       {std::string(""), std::string("track"), std::string("c3d"), "track " + kHandstand + " --height 10",
+        "track " + kHandstand + " --samples many", "track " + kHandstand + " --no-such-option",
+        "track " + kHandstand + " --method kalman", "c3d " + kHandstand + " --frames"}) {
     SCOPED_TRACE(arguments);
     expect_one_sentence(run_command(arguments), "--help).");
   }
