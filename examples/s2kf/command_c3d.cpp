@@ -91,7 +91,8 @@ void run(const std::string& file, bool json, const std::string& frames_option) {
     out["model_outputs"] = model_outputs;
     out["warnings"] = info.warnings;
     if (with_data) out["data"] = std::move(data);
-    std::cout << out.dump(1) << "\n";
+    // Text from the file is UTF-8 (the reader decodes Latin-1); a file name that is not is replaced.
+    std::cout << out.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
     return;
   }
 

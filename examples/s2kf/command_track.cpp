@@ -3,6 +3,7 @@
 #include "command.hpp"
 #include "extra_outputs.hpp"
 #include "frame_figure.hpp"
+#include "interruption.hpp"
 #include "marker_set_json.hpp"
 #include "track_summary.hpp"
 #include "tracker_samples.hpp"
@@ -116,6 +117,7 @@ nlohmann::json truth_json(const track::TruthComparison& accuracy) {
 /// output files; returns the summary and the paragraph to print.
 TrackOutcome track_file(const std::string& input, const std::string& prefix, const TrackSettings& settings,
                         bool show_progress) {
+  throw_if_interrupted();    // a batch stops at the next recording
   track::StageTimes outside;  // stages outside the session and the run: opening, finishing the files
   auto stage_start = std::chrono::steady_clock::now();
   std::unique_ptr<c3d::C3dFrameSource> source;
@@ -128,6 +130,15 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   }
   outside.read = track::seconds_since(stage_start);
   const c3d::C3dInfo& info = source->info();
+  // Everything that can be checked is checked before tracking: a late failure would waste the run.
+  if (!c3d::plausible_frame_rate(info.rate))  // the reader gives 0 for none that is a positive number
+    throw UserError(input + ": " +
+                    (info.rate > 0 ? "the frame rate " + c3d::detail::format_number(info.rate) +
+                                         " Hz in its header is not one motion capture runs at (" +
+                                         c3d::detail::format_number(c3d::kPlausibleFrameRateHz[0]) + " to " +
+                                         c3d::detail::format_number(c3d::kPlausibleFrameRateHz[1]) + " Hz)"
+                                   : std::string("no valid frame rate in its header or POINT:RATE")) +
+                    "; correct POINT:RATE");
   // Ground truth, read before tracking so a wrong file fails fast.
   std::optional<io::MotionTable> truth;
   if (!settings.truth.empty()) {
@@ -169,6 +180,10 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": " + e.what());
   }
+  if (truth && truth->joint_names != session.model.joint_names())
+    throw UserError(
+        "--truth: " + settings.truth + " does not have the " + std::to_string(session.model.joint_count()) +
+        " joint columns of the body model (write it with s2kf simulate, whose _truth.csv has them)");
   // Model outputs never match a marker; the summary lists them under their names in the file.
   // (ignored labels keep the file's order, so the k-th empty one is the k-th model output).
   auto empty = session.mapping.ignored_labels.begin();
@@ -187,6 +202,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   c3d::Frame figure_points;  // the frame --figure draws, as recorded
   track::RunHooks hooks;
   hooks.on_read = [&](const MarkerFrame& frame) {
+    throw_if_interrupted();
     if (frame.index == settings.figure_frame) figure_points = frame;
     if (settings.realtime)
       std::this_thread::sleep_until(
@@ -207,23 +223,26 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                 << "/" << info.frame_count << std::flush;
     }
   };
-  // Outputs, each written completely or not at all. Rows go to the files as they are produced:
-  // as tracked (memory stays constant however long the recording is), or after the backward pass
-  // with --smooth.
+  // Outputs, all or none: every file goes to a temporary name and the whole set is renamed into
+  // place by motion_files.finish() at the end, the summary last; a failure or an interrupt before
+  // then removes the temporary files and leaves existing outputs as they were. Rows go to the files
+  // as they are produced: as tracked (memory stays constant however long the recording is), or
+  // after the backward pass with --smooth.
   const std::string name = fs::path(input).stem().string();
   stage_start = std::chrono::steady_clock::now();
+  const OpenOutputs open_outputs;  // SIGINT/SIGTERM now wait for throw_if_interrupted()
   io::MotionStreamWriter motion_files(motion_file_paths(prefix, settings.outputs), session.model, info.rate,
                                       name, bvh_units(settings.outputs));
   write_model_outputs(motion_files, settings.outputs, prefix, input, session.model,
                       session.mapping);  // .osim, .trc
   outside.writing = track::seconds_since(stage_start);
-  io::AtomicFileWriter marker_report(prefix + "_markers.csv");
-  write_marker_report_header(marker_report.stream());
+  std::ostream& marker_report = motion_files.companion(prefix + "_markers.csv");
+  write_marker_report_header(marker_report);
   std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
   hooks.sink = [&](const track::TrackedFrame& f) {
+    throw_if_interrupted();
     motion_files.append(f.frame, f.time, f.values);
-    write_marker_report_row(marker_report.stream(), f.frame, f.time, f.mean_marker_distance,
-                            f.visible_markers);
+    write_marker_report_row(marker_report, f.frame, f.time, f.mean_marker_distance, f.visible_markers);
     if (f.frame == settings.figure_frame && io::is_tracked_row(f.values))
       figure_pose = body::pose_from_row(f.values);
   };
@@ -240,6 +259,12 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (run.frames_tracked == 0)
     throw UserError(input + ": no frame has the " + std::to_string(session.tracker.min_markers_to_start) +
                     " visible markers needed to start tracking");
+  if (2 * run.frames_prediction_only > run.frames_tracked)
+    throw UserError(input + ": the filter's update failed in " + std::to_string(run.frames_prediction_only) +
+                    " of " + std::to_string(run.frames_tracked) +
+                    " tracked frames, which only repeat its prediction; no result is written (" +
+                    (run.warnings.empty() ? std::string("see the header and labels") : run.warnings.front()) +
+                    ")");
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
   std::string figure_file;
   if (settings.figure_frame >= 0) {
@@ -254,16 +279,13 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       warnings.push_back(problem);
   }
 
-  stage_start = std::chrono::steady_clock::now();
-  motion_files.finish();
-  marker_report.commit();
-  outside.writing += track::seconds_since(stage_start);
-  // Accuracy against the truth, from the motion as written (frames from the 20th on).
+  // Accuracy against the truth, from the motion as written (frames from the 20th on), read back
+  // before the set is committed.
   std::optional<track::TruthComparison> accuracy;
   if (truth) {
     try {
-      accuracy = track::compare_with_truth(session.model, io::load_motion_csv(prefix + ".csv"), *truth,
-                                           kTruthWarmupFrames);
+      accuracy = track::compare_with_truth(session.model, io::load_motion_csv(motion_files.flushed_csv()),
+                                           *truth, kTruthWarmupFrames);
     } catch (const std::invalid_argument& e) {
       throw UserError("--truth: " + settings.truth + ": " + e.what());
     }
@@ -272,7 +294,12 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                                          settings.smooth, warnings, outside);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
   if (accuracy) summary["truth"] = truth_json(*accuracy);
-  io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
+  // Labels and file names are UTF-8 (the reader decodes Latin-1); anything else is replaced, never
+  // a reason to lose the run.
+  motion_files.companion(prefix + ".json")
+      << summary.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+  throw_if_interrupted();
+  motion_files.finish();
   if (settings.html)
     viewer::write_result_page(prefix, session.model, session.mapping, settings.truth);  // --html
 
@@ -301,7 +328,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     paragraph << ". Converged at frame " << converged << "; mean marker distance after that "
               << format(level, 1) << " mm (" << format(overall, 1) << " mm over all tracked frames)";
   else
-    paragraph << ". The marker distance never settled within 1.5 times its final level; mean "
+    paragraph << ". The marker distance never settled (its median over a second stayed above 1.5 times its "
+                 "median over the recording); mean "
               << format(overall, 1) << " mm over all tracked frames";
   paragraph << ". Latency per frame: median " << format(median_ms, 3) << " ms, p99 " << format(p99_ms, 3)
             << " ms";

@@ -37,10 +37,12 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
                                     const track::Session& session, const track::TrackingRun& run,
                                     bool smoothed, const std::vector<std::string>& warnings,
                                     const track::StageTimes& outside = {}) {
-  const long converged = track::converged_frame(run.mean_marker_distance);
-  // The convergence rule restarts at any late frame above 1.5 times the final level, so on long
-  // real recordings the mean over every tracked frame is reported as well.
-  const double level = track::mean_from(run.mean_marker_distance, converged);
+  // Converged where the running median over the next second falls below 1.5 times the
+  // recording's median; the mean over every tracked frame is reported as well.
+  const long converged =
+      track::converged_frame(run.mean_marker_distance, track::frames_per_second(session.rate_hz));
+  const double level = converged >= 0 ? track::mean_from(run.mean_marker_distance, converged)
+                                      : std::numeric_limits<double>::quiet_NaN();
   const double overall = track::mean_from(run.mean_marker_distance, 0);
   nlohmann::json calibration = nullptr;
   if (session.calibration)

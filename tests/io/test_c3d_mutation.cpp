@@ -1,15 +1,23 @@
 // Thousands of corrupted variants of the real C3D files (seeded, so every run tests the same
 // ones): the reader must either throw C3dError or return a consistent result, never crash, hang,
-// allocate without bound or throw anything else. Runs under ASan/UBSan in CI.
+// allocate without bound or throw anything else. Runs under ASan/UBSan in CI. C3dFuzz goes on
+// from there with a new seed each run for a bounded time: stacked libFuzzer-style mutations of
+// every bundled file, the mutation loop CI runs where no libFuzzer is built.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "s2kf/core/label_text.hpp"
 #include "s2kf/io/c3d_reader.hpp"
 
 namespace {
@@ -37,6 +45,14 @@ void read_variant(const std::string& bytes, Outcome& outcome) {
     ASSERT_GE(info.frame_count, 0);
     ASSERT_LE(info.data_offset + info.frame_count * info.frame_bytes, size);
     ASSERT_EQ(info.labels.size(), static_cast<std::size_t>(info.point_count));
+    // Every text the reader hands on is UTF-8, whatever bytes the file holds (JSON and CSV
+    // outputs carry it).
+    for (const auto& label : info.labels)
+      ASSERT_TRUE(s2kf::is_utf8(label.raw) && s2kf::is_utf8(label.name) && s2kf::is_utf8(label.subject))
+          << label.raw;
+    ASSERT_TRUE(s2kf::is_utf8(info.units)) << info.units;
+    for (const std::string& text : info.descriptions) ASSERT_TRUE(s2kf::is_utf8(text)) << text;
+    for (const std::string& text : info.warnings) ASSERT_TRUE(s2kf::is_utf8(text)) << text;
     Frame frame;
     for (int f = 0; f < 6 && reader.read_frame(frame); ++f)
       for (Eigen::Index p = 0; p < frame.positions.cols(); ++p) {
@@ -133,6 +149,121 @@ INSTANTIATE_TEST_SUITE_P(RealFiles, C3dMutation,
                              if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
                            return name;
                          });
+
+/// A number from the environment, or `fallback` when the variable is unset or not a number.
+double environment_number(const char* name, double fallback) {
+  const char* text = std::getenv(name);
+  char* end = nullptr;
+  const double value = text ? std::strtod(text, &end) : fallback;
+  return text && end != text ? value : fallback;
+}
+
+/// One to eight stacked mutations of `v`, libFuzzer's kinds: bit flips, random and boundary bytes,
+/// boundary 16/32-bit words and floats (NaN, infinity, 1e30, 1e-40, 0, -1), erased, inserted and
+/// repeated chunks, a cut, and a splice from another file. Two in three land in the header and
+/// parameter blocks, where the reader decides what the rest of the file means.
+std::string mutate(std::string v, const std::string& other, std::mt19937& rng) {
+  const auto below = [&](std::size_t n) {
+    return n == 0 ? std::size_t(0) : std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
+  };
+  const auto offset = [&](std::size_t width) {  // v shrinks and grows as mutations stack up
+    const std::size_t head = std::min<std::size_t>(v.size(), 512 * 12);
+    const std::size_t range = below(3) < 2 ? head : v.size();
+    return range > width ? below(range - width + 1) : std::size_t(0);
+  };
+  static const std::uint32_t words[] = {0,      1,      0x7F,   0x80,       0xFF,
+                                        0x7FFF, 0x8000, 0xFFFF, 0x7FFFFFFF, 0xFFFFFFFF};
+  static const float floats[] = {0.0f,
+                                 -1.0f,
+                                 1e30f,
+                                 1e-40f,
+                                 -0.0f,
+                                 std::numeric_limits<float>::quiet_NaN(),
+                                 std::numeric_limits<float>::infinity()};
+  for (std::size_t n = 1 + below(8); n > 0 && !v.empty(); --n) {
+    switch (below(9)) {
+      case 0:
+        v[offset(1)] ^= static_cast<char>(1 << below(8));
+        break;
+      case 1:
+        v[offset(1)] = static_cast<char>(below(256));
+        break;
+      case 2:
+        v[offset(1)] = static_cast<char>(words[below(5)]);
+        break;
+      case 3:
+        if (v.size() >= 2) {
+          const std::uint32_t w = words[below(8)];
+          const std::size_t at = offset(2);
+          v[at] = static_cast<char>(w & 0xFF), v[at + 1] = static_cast<char>((w >> 8) & 0xFF);
+        }
+        break;
+      case 4:
+        if (v.size() >= 4) {
+          const float f = floats[below(7)];
+          std::uint32_t bits = below(2) ? words[below(10)] : 0;
+          if (bits == 0) std::memcpy(&bits, &f, 4);
+          std::memcpy(&v[offset(4)], &bits, 4);
+        }
+        break;
+      case 5: {
+        const std::size_t at = offset(1);
+        v.erase(at, 1 + below(std::min<std::size_t>(64, v.size() - at)));
+        break;
+      }
+      case 6: {
+        std::string bytes(1 + below(32), '\0');
+        for (char& c : bytes) c = static_cast<char>(below(256));
+        v.insert(offset(0), bytes);
+        break;
+      }
+      case 7: {
+        const std::size_t at = offset(1);
+        v.insert(offset(0), v.substr(at, 1 + below(std::min<std::size_t>(128, v.size() - at))));
+        break;
+      }
+      case 8:
+        if (below(2) && !other.empty()) {
+          const std::size_t at = offset(1), from = below(other.size());
+          v.replace(at, std::min<std::size_t>(256, v.size() - at), other.substr(from, 1 + below(256)));
+        } else {
+          v.resize(below(v.size()));
+        }
+        break;
+    }
+  }
+  return v;
+}
+
+TEST(C3dFuzz, RandomMutationsForABoundedTimeGiveAnErrorOrAConsistentResult) {
+  // S2KF_FUZZ_SECONDS (default 20) bounds the run; S2KF_FUZZ_SEED repeats one (printed on failure).
+  const double seconds = environment_number("S2KF_FUZZ_SECONDS", 20.0);
+  const auto seed = static_cast<unsigned>(environment_number("S2KF_FUZZ_SEED", std::random_device{}()));
+  SCOPED_TRACE("S2KF_FUZZ_SEED=" + std::to_string(seed));
+  RecordProperty("seed", static_cast<int>(seed));
+  std::vector<std::string> corpus;
+  for (const auto& folder : {std::string(S2KF_C3D_DATA_DIR), std::string(S2KF_DATA_DIR)})
+    for (const auto& entry : std::filesystem::directory_iterator(folder))
+      if (entry.path().extension() == ".c3d") {
+        std::ifstream in(entry.path(), std::ios::binary);
+        corpus.push_back(shortened(std::string((std::istreambuf_iterator<char>(in)), {})));
+      }
+  ASSERT_GT(corpus.size(), 10u);
+  std::mt19937 rng(seed);
+  Outcome outcome;
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  long variants = 0;
+  while (std::chrono::steady_clock::now() < end) {
+    const std::string& original = corpus[rng() % corpus.size()];
+    const std::string variant = mutate(original, corpus[rng() % corpus.size()], rng);
+    read_variant(variant, outcome);
+    if (HasFatalFailure()) return;
+    ++variants;
+  }
+  RecordProperty("variants", static_cast<int>(variants));
+  EXPECT_GT(outcome.results, 0);
+  EXPECT_GT(outcome.errors, 0);
+}
 
 TEST(C3dMutationCases, HugeDeclaredCountsAreBoundedByTheFileSize) {
   // 65535 points per frame and 65535 frames declared in a file of two blocks plus one frame.

@@ -246,7 +246,8 @@ TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
     EXPECT_DOUBLE_EQ(s2kf.run.mean_marker_distance[k], by_hand.mean_marker_distance[k]) << k;
     EXPECT_DOUBLE_EQ(baseline.run.mean_marker_distance[k], by_hand_baseline.mean_marker_distance[k]) << k;
   }
-  const long converged = track::converged_frame(by_hand.mean_marker_distance);
+  const long converged =
+      track::converged_frame(by_hand.mean_marker_distance, track::frames_per_second(recording.rate_hz));
   EXPECT_EQ(s2kf.converged_frame, converged);
   EXPECT_DOUBLE_EQ(s2kf.level_mm, track::mean_from(by_hand.mean_marker_distance, converged));
   const track::TruthComparison direct = track::compare_with_truth(setup.model, by_hand.motion, truth, 20);

@@ -77,16 +77,37 @@ TEST(Session, RefusesRecordingsItCannotTrack) {
   SequenceFrameSource zero(no_rate);
   EXPECT_THROW(track::prepare_session(zero, kit_like_set(), {}, samples), std::invalid_argument);
 
-  // A recording in metres read as mm: a body of about 1.7 mm is not a person's.
+  // A recording in metres read as mm: a body of about 1.7 mm is not a person's, and a given height
+  // (what the old message advised) does not hide it: the rigid marker pairs still measure 1.7 mm.
   MarkerSequence metres = c3d::read_c3d(data_file("handstand.c3d")).frames(0, 20);
   metres.positions /= 1000;
   SequenceFrameSource tiny(metres);
-  try {
-    track::prepare_session(tiny, kit_like_set(), {}, samples);
-    FAIL() << "a recording in metres was accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("is not a person's"), std::string::npos) << e.what();
+  for (const double given : {0.0, 1750.0}) {
+    track::SessionOptions options;
+    options.height_mm = given;
+    try {
+      track::prepare_session(tiny, kit_like_set(), options, samples);
+      FAIL() << "a recording in metres was accepted with --height " << given;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("in metres, not millimetres"), std::string::npos) << e.what();
+    }
   }
+}
+
+TEST(Session, UnitsProblemComparesTheRigidPairsWithTheHeight) {
+  // Estimated from the pairs themselves: only a body outside 300..3000 mm is refused.
+  EXPECT_EQ(track::units_problem(1700, 1700, "estimated from 12 rigid marker pairs"), "");
+  EXPECT_NE(track::units_problem(1.7, 1.7, "estimated from 12 rigid marker pairs").find("in metres"),
+            std::string::npos);
+  EXPECT_NE(track::units_problem(170, 170, "estimated from 3 rigid marker pairs").find("in centimetres"),
+            std::string::npos);
+  // A given height: the pairs must agree within a factor of 2 (a child, a mis-scaled set pass).
+  EXPECT_EQ(track::units_problem(1300, 1750, "given"), "");
+  EXPECT_NE(track::units_problem(1.75, 1750, "given").find("but the height given is 1750 mm"),
+            std::string::npos);
+  EXPECT_NE(track::units_problem(68.9, 1750, "given").find("in inches"), std::string::npos);
+  // A factor no unit explains is still refused, without naming a unit.
+  EXPECT_NE(track::units_problem(500, 1750, "given").find("not in millimetres"), std::string::npos);
 }
 
 TEST(Session, StopsAtCoordinatesBeyondAKilometre) {

@@ -107,7 +107,8 @@ Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& 
     return true;
   };
   result.run = track::run_tracking(tracker, next, recording.info.rate, model.joint_names(), true);
-  result.converged = track::converged_frame(result.run.mean_marker_distance);
+  result.converged =
+      track::converged_frame(result.run.mean_marker_distance, track::frames_per_second(recording.info.rate));
   result.level_mm = track::mean_from(result.run.mean_marker_distance, result.converged);
   result.truth = track::compare_with_truth(model, result.run.motion, truth, 10);
   return result;
@@ -130,12 +131,63 @@ TEST(MarkerMapping, StripsSubjectPrefixesMatchesCaseInsensitivelyAndReportsTheRe
   EXPECT_EQ(mapping.markers_used(), 3);
 }
 
-TEST(TrackingMetrics, ConvergedFrameIsTheFirstAfterWhichTheDistanceStaysNearItsFinalLevel) {
-  std::vector<double> series{500, 300, 100, 40, 12, 10, 11, 16, 10, 10, 9, 10};
-  // Final level: median of the second half = 10; within 1.5 x from frame 8 on (16 > 15 at frame 7).
-  EXPECT_EQ(track::converged_frame(series), 8);
+TEST(TrackingMetrics, ConvergedFrameIsWhereTheRunningMedianOverOneSecondFallsBelowOneAndAHalfMedians) {
+  // Median of all 12 = 11.5, threshold 17.25. Windows of 3 frames: from frame 2 {100, 40, 12}
+  // has median 40; from frame 3 {40, 12, 10} median 12 < 17.25, although frame 3 itself is 40.
+  const std::vector<double> series{500, 300, 100, 40, 12, 10, 11, 16, 10, 10, 9, 10};
+  EXPECT_EQ(track::converged_frame(series, 3), 3);
+  // A window of one frame is the frame itself: 12 at frame 4 is the first below 17.25.
+  EXPECT_EQ(track::converged_frame(series, 1), 4);
+  // A late fast phase (the old rule restarted there) does not move it; NaN frames are skipped.
+  std::vector<double> late = series;
+  late.insert(late.end(), {10, 10, 10, 10, 10, 10, 10, 10, 60, 70, 80, 10, NAN, 10});
+  EXPECT_EQ(track::converged_frame(late, 3), 3);
+  // Leading NaN frames: the first measured frame whose window qualifies.
+  EXPECT_EQ(track::converged_frame({NAN, NAN, 9, 10, 11}, 2), 2);
+  // Never below: a distance that only grows ends above 1.5 x its median in every window.
+  EXPECT_EQ(track::converged_frame({1, 2, 4, 8, 16, 32, 64}, 7, 0.1), -1);
+  EXPECT_EQ(track::converged_frame({NAN, NAN}, 3), -1);
+  EXPECT_EQ(track::frames_per_second(120.0), 120);
+  EXPECT_EQ(track::frames_per_second(0.0), 1);
   EXPECT_NEAR(track::quantile({1, 2, 3, 4}, 0.5), 2.5, 1e-12);
   EXPECT_NEAR(track::mean_from({1, NAN, 3}, 0), 2.0, 1e-12);
+}
+
+/// A stand-in tracker that reports a scripted status per frame, tracked from the second frame on.
+struct ScriptedStatusTracker {
+  std::vector<FilterStatus> statuses;
+  std::size_t next = 0;
+  track::FrameEstimate estimate;
+  template <typename Positions, typename Visible>
+  const track::FrameEstimate& process(const Positions&, const Visible&) {
+    estimate.tracked = next > 0;
+    estimate.status = statuses[next++];
+    return estimate;
+  }
+};
+
+TEST(TrackingRun, CountsTrackedFramesWhoseUpdateFailed) {
+  // What `s2kf track` refuses when it is most of the run: frames that only repeat the prediction.
+  const body::BodyModel model = body::mmm_body_model();
+  ScriptedStatusTracker tracker{{FilterStatus::posterior_not_positive_definite, FilterStatus::ok,
+                                 FilterStatus::posterior_not_positive_definite, FilterStatus::gated,
+                                 FilterStatus::nothing_observed, FilterStatus::non_finite_model_output},
+                                0,
+                                {}};
+  tracker.estimate.pose = body::zero_pose(model);
+  long f = 0;
+  const auto next = [&](MarkerFrame& frame) {
+    frame.index = f;
+    frame.positions = Eigen::Matrix3Xd::Zero(3, 1);
+    frame.visible = FrameVisibility::Constant(1, true);
+    return f++ < 6;
+  };
+  const track::TrackingRun run = track::run_tracking(tracker, next, 100.0, model.joint_names());
+  EXPECT_EQ(run.frames, 6);
+  EXPECT_EQ(run.frames_tracked, 5);
+  // Not the untracked first frame, nor "nothing observed" (no update to fail): 3 of 5.
+  EXPECT_EQ(run.frames_prediction_only, 3);
+  EXPECT_EQ(run.warnings.size(), 3u);  // one per kind of failure
 }
 
 TEST(Tracker, CleanHandstandIsTrackedTightly) {

@@ -1,6 +1,7 @@
 /// @file
-/// Text helpers for names read from files (C3D labels and parameters, marker-set labels): blanks
-/// trimmed, case folded (ASCII only: labels are matched byte for byte otherwise), subject prefixes.
+/// Text helpers for names read from files (C3D labels and parameters, marker-set labels): bytes
+/// decoded to UTF-8, blanks trimmed, case folded (ASCII only: labels are matched byte for byte
+/// otherwise), subject prefixes.
 #pragma once
 
 #include <cctype>
@@ -17,6 +18,51 @@ inline std::string trim(std::string_view text) {
   while (begin < end && blank(text[begin])) ++begin;
   while (end > begin && blank(text[end - 1])) --end;
   return std::string(text.substr(begin, end - begin));
+}
+
+/// True when `text` is well-formed UTF-8 (no overlong forms, surrogates or code points past U+10FFFF).
+inline bool is_utf8(std::string_view text) {
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+    const unsigned char lead = byte(i);
+    std::size_t length = 0;
+    unsigned char low = 0x80, high = 0xBF;  // the range of the second byte
+    if (lead < 0x80)
+      length = 1;
+    else if (lead >= 0xC2 && lead <= 0xDF)
+      length = 2;
+    else if (lead >= 0xE0 && lead <= 0xEF)
+      length = 3, low = lead == 0xE0 ? 0xA0 : 0x80, high = lead == 0xED ? 0x9F : 0xBF;
+    else if (lead >= 0xF0 && lead <= 0xF4)
+      length = 4, low = lead == 0xF0 ? 0x90 : 0x80, high = lead == 0xF4 ? 0x8F : 0xBF;
+    else
+      return false;
+    if (i + length > text.size()) return false;
+    for (std::size_t k = 1; k < length; ++k)
+      if (byte(i + k) < (k == 1 ? low : 0x80) || byte(i + k) > (k == 1 ? high : 0xBF)) return false;
+    i += length;
+  }
+  return true;
+}
+
+/// Text bytes from a file as UTF-8: kept when they already are UTF-8 (ASCII included), else read as
+/// Latin-1, the 8-bit text of European C3D files ("\xC9" becomes "\u00C9", É). Every character the
+/// file has survives, so labels still match a marker set that spells them the same way.
+inline std::string utf8_from_file_text(std::string_view bytes) {
+  if (is_utf8(bytes)) return std::string(bytes);
+  std::string text;
+  text.reserve(2 * bytes.size());
+  for (const char c : bytes) {
+    const auto code = static_cast<unsigned char>(c);
+    if (code < 0x80) {
+      text += c;
+    } else {
+      text += static_cast<char>(0xC0 | (code >> 6));
+      text += static_cast<char>(0x80 | (code & 0x3F));
+    }
+  }
+  return text;
 }
 
 inline std::string upper_case(std::string text) {

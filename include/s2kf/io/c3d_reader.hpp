@@ -128,6 +128,13 @@ inline std::vector<std::string> marker_labels(const C3dInfo& info) {
   return labels;
 }
 
+/// The frame rates motion capture runs at, in Hz (slow exports to high-speed cameras): a header
+/// outside them (1e-40, 1e30) is corrupt, and tracking refuses it.
+inline constexpr double kPlausibleFrameRateHz[2] = {1.0, 100000.0};
+inline bool plausible_frame_rate(double hz) {
+  return hz >= kPlausibleFrameRateHz[0] && hz <= kPlausibleFrameRateHz[1];
+}
+
 namespace detail {
 
 /// Shortest decimal that reads back as the same float, for warnings a user compares with a hex dump.
@@ -358,14 +365,25 @@ class C3dReader {
                          std::to_string(info_.data_offset) + ", but the file has only " +
                          std::to_string(size_) + " bytes");
 
-    // Rate: POINT:RATE, else the header (Xsens and BTS files lack the parameter).
+    // Rate: POINT:RATE, else the header (Xsens and BTS files lack the parameter). A rate that is
+    // not a positive number, or none a camera runs at, is said: it makes every time in the outputs wrong.
     info_.rate = header_rate;
-    if (const Parameter* p = parameter("POINT", "RATE");
-        p && !p->numbers.empty() && p->numbers[0] > 0.0 && std::isfinite(p->numbers[0]))
-      info_.rate = p->numbers[0];
-    if (!(info_.rate > 0.0) || !std::isfinite(info_.rate)) {
-      warn("no valid frame rate in the header or POINT:RATE");
+    const auto positive = [](double rate) { return rate > 0.0 && std::isfinite(rate); };
+    if (const Parameter* p = parameter("POINT", "RATE"); p && !p->numbers.empty()) {
+      if (positive(p->numbers[0]))
+        info_.rate = p->numbers[0];
+      else if (positive(header_rate))
+        warn("POINT:RATE is " + detail::format_number(p->numbers[0]) + "; the header's " +
+             detail::format_number(header_rate) + " Hz is used");
+    }
+    if (!positive(info_.rate)) {
+      warn("no valid frame rate: the header says " + detail::format_number(header_rate) +
+           " Hz and POINT:RATE gives none that is a positive number");
       info_.rate = 0.0;
+    } else if (!plausible_frame_rate(info_.rate)) {
+      warn("the frame rate " + detail::format_number(info_.rate) +
+           " Hz is implausible (motion capture runs at " + detail::format_number(kPlausibleFrameRateHz[0]) +
+           " to " + detail::format_number(kPlausibleFrameRateHz[1]) + " Hz)");
     }
 
     read_units();
@@ -443,8 +461,8 @@ class C3dReader {
         stop("an entry cut off by the end of the file");
         break;
       }
-      std::string name = upper_case(trim(
-          std::string_view(reinterpret_cast<const char*>(&bytes[q]), static_cast<std::size_t>(name_length))));
+      std::string name = upper_case(utf8_from_file_text(trim(std::string_view(
+          reinterpret_cast<const char*>(&bytes[q]), static_cast<std::size_t>(name_length)))));
       q += name_length;
       const std::int64_t offset_position = q;
       const int offset = d.i16(&bytes[q]);
@@ -493,8 +511,8 @@ class C3dReader {
         const int description_length = bytes[structural_end];
         const std::int64_t available =
             std::min<std::int64_t>(description_length, window - structural_end - 1);
-        parameter.description = trim(std::string_view(
-            reinterpret_cast<const char*>(&bytes[structural_end + 1]), static_cast<std::size_t>(available)));
+        parameter.description = utf8_from_file_text(trim(std::string_view(
+            reinterpret_cast<const char*>(&bytes[structural_end + 1]), static_cast<std::size_t>(available))));
         natural_end = structural_end + 1 + available;
       }
       if (id < 0) {
@@ -550,8 +568,8 @@ class C3dReader {
         const std::int64_t count = elements / length;
         parameter.strings.reserve(static_cast<std::size_t>(count));
         for (std::int64_t i = 0; i < count; ++i)
-          parameter.strings.push_back(trim(std::string_view(reinterpret_cast<const char*>(data + i * length),
-                                                            static_cast<std::size_t>(length))));
+          parameter.strings.push_back(utf8_from_file_text(trim(std::string_view(
+              reinterpret_cast<const char*>(data + i * length), static_cast<std::size_t>(length)))));
         return;
       }
       case 1:

@@ -143,6 +143,17 @@ class MotionStreamWriter {
     if (acceleration_csv_) acceleration_csv_->check();
   }
 
+  /// The CSV as written so far, flushed, under its temporary name (the target's until finish()):
+  /// what a caller reads back before the set is committed (accuracy against a truth). Throws
+  /// std::logic_error when no CSV is written, std::runtime_error when it cannot be written.
+  std::string flushed_csv() {
+    if (!csv_ || finished_)
+      throw std::logic_error("MotionStreamWriter::flushed_csv without a CSV in progress");
+    csv_->stream().flush();
+    csv_->check();
+    return csv_->temporary_path().string();
+  }
+
   /// Same, with the row given as "not tracked".
   void append_untracked(long frame, double time) {
     append(frame, time, Eigen::VectorXd::Constant(columns(), std::numeric_limits<double>::quiet_NaN()));

@@ -146,7 +146,7 @@ struct MethodResult {
   Method method = Method::s2kf;
   int samples = 0;  ///< S2KF sample count; 0 for the baseline
   TrackingRun run;
-  long converged_frame = -1;  ///< first frame after which the distance stays within 1.5 x its final level
+  long converged_frame = -1;  ///< converged_frame(): the running median over 1 s below 1.5 x the median
   double level_mm = 0;        ///< mean marker distance from converged_frame on
   double worst_mm = 0;        ///< largest per-frame mean marker distance from converged_frame on
   long worst_frame = -1;
@@ -164,8 +164,9 @@ S2KF_INLINE MethodResult summarise(Method method, int samples, TrackingRun run, 
   MethodResult result;
   result.method = method;
   result.samples = method == Method::s2kf ? samples : 0;
-  result.converged_frame = converged_frame(run.mean_marker_distance);
-  result.level_mm = mean_from(run.mean_marker_distance, result.converged_frame);
+  result.converged_frame = converged_frame(run.mean_marker_distance, frames_per_second(setup.rate_hz));
+  result.level_mm = result.converged_frame >= 0 ? mean_from(run.mean_marker_distance, result.converged_frame)
+                                                : std::numeric_limits<double>::quiet_NaN();
   const auto& d = run.mean_marker_distance;
   for (std::size_t k = 0; k < d.size(); ++k) {
     if (!std::isfinite(d[k])) continue;
@@ -301,7 +302,7 @@ S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const Session& setup, const Mar
                      double& worst) {
       std::vector<double> distance;
       track_recording(setup, occluded, complete, method, options.samples, &distance);
-      levels.push_back(mean_from(distance, converged_frame(distance)));
+      levels.push_back(level_after_convergence(distance, frames_per_second(setup.rate_hz)));
       for (std::size_t k = static_cast<std::size_t>(std::max(0L, warmup)); k < distance.size(); ++k)
         if (std::isfinite(distance[k])) worst = std::max(worst, distance[k]);
       distances.push_back(std::move(distance));

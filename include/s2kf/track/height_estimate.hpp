@@ -13,8 +13,13 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace s2kf::track {
@@ -94,5 +99,30 @@ S2KF_INLINE std::optional<HeightEstimate> estimate_height(FrameSource& source, c
   return HeightEstimate{*mm, estimator.pair_count()};
 }
 #endif
+
+/// Why the recording's coordinates cannot be a person's in millimetres, or "" when they can. The
+/// rigid marker pairs measure the body whatever the file's POINT:UNITS say: `geometric_mm` is the
+/// height they give (estimate_height), `height_mm` the height the run would use and `source` where
+/// that came from ("given", ...). A metres recording labelled mm gives a geometric height of a
+/// few mm, and a given --height cannot hide it: the two then differ a thousandfold.
+inline std::string units_problem(double geometric_mm, double height_mm, const std::string& source) {
+  const bool estimated = source.rfind("estimated", 0) == 0;
+  const double factor = (estimated ? 1750.0 : height_mm) / geometric_mm;  // what the coordinates lack
+  if (estimated ? (geometric_mm > 300 && geometric_mm < 3000) : (factor > 0.5 && factor < 2.0)) return "";
+  std::string unit;  // the unit the coordinates look like, when one fits within a factor of 1.5
+  for (const auto& [name, mm] : {std::pair<const char*, double>{"metres", 1000.0},
+                                 {"decimetres", 100.0},
+                                 {"inches", 25.4},
+                                 {"centimetres", 10.0},
+                                 {"micrometres", 1e-3}})
+    if (factor > mm / 1.5 && factor < mm * 1.5) unit = name;
+  std::ostringstream s;
+  s << "the distances between markers on the same segment give a body height of " << std::setprecision(3)
+    << geometric_mm << " mm";
+  if (!estimated) s << ", but the height " << source << " is " << std::lround(height_mm) << " mm";
+  s << ": the coordinates are " << (unit.empty() ? "not in millimetres" : "in " + unit + ", not millimetres")
+    << "; correct POINT:UNITS in the file";
+  return s.str();
+}
 
 }  // namespace s2kf::track

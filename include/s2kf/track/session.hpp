@@ -144,24 +144,26 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
         "only " + std::to_string(used) + " of its labels are markers of the marker set " + set.name +
         "; at least " + std::to_string(session.tracker.min_markers_to_start) + " are needed to track");
 
-  // The height estimate reads spread frames; its time is kept apart from theirs.
-  const auto estimate_height_timed = [&]() {
+  // The rigid marker pairs measure the body in the file's coordinates: they give the height when
+  // none is given, and check the units against a given one. Their time is kept apart from the
+  // reads'.
+  const std::optional<HeightEstimate> geometric = [&]() {
     TimedFrameSource timed(source, session.times.read);
     const double read_before = session.times.read;
     const auto start = std::chrono::steady_clock::now();
     std::optional<HeightEstimate> estimate = estimate_height(timed, model, session.mapping);
     session.times.height = seconds_since(start) - (session.times.read - read_before);
     return estimate;
-  };
+  }();
   if (options.height_mm > 0) {
     session.height_mm = options.height_mm;
     session.height_source = "given";
   } else if (set.height_mm) {
     session.height_mm = *set.height_mm;
     session.height_source = "from the marker-set file";
-  } else if (const std::optional<HeightEstimate> estimate = estimate_height_timed()) {
-    session.height_mm = estimate->mm;
-    session.height_source = "estimated from " + std::to_string(estimate->pairs) + " rigid marker pairs";
+  } else if (geometric) {
+    session.height_mm = geometric->mm;
+    session.height_source = "estimated from " + std::to_string(geometric->pairs) + " rigid marker pairs";
   } else if (options.fallback_height_mm > 0) {
     session.height_mm = options.fallback_height_mm;
     session.height_source = "default (no two markers on one segment to estimate it from)";
@@ -172,6 +174,10 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
   } else {
     throw std::invalid_argument("the body height cannot be estimated from the markers; give --height");
   }
+  if (geometric)
+    if (const std::string problem = units_problem(geometric->mm, session.height_mm, session.height_source);
+        !problem.empty())
+      throw std::invalid_argument(problem);
   if (!plausible_height_mm(session.height_mm))
     throw std::invalid_argument("a body height of " + std::to_string(std::lround(session.height_mm)) +
                                 " mm is not a person's; check the file's units or give --height");

@@ -22,27 +22,29 @@ inline double quantile(std::vector<double> values, double q) {
   return values[below] + (position - static_cast<double>(below)) * (values[above] - values[below]);
 }
 
-/// The final level of a per-frame distance series: the median over its second half (finite values).
-inline double final_level(const std::vector<double>& distance) {
-  std::vector<double> tail(distance.begin() + static_cast<std::ptrdiff_t>(distance.size() / 2),
-                           distance.end());
-  return quantile(tail, 0.5);
+/// Frames in one second at `rate_hz` (at least one): the window converged_frame looks ahead over.
+inline long frames_per_second(double rate_hz) {
+  return std::isfinite(rate_hz) && rate_hz >= 1 ? std::lround(rate_hz) : 1L;
 }
 
-/// First frame after which the distance stays within `factor` times its final level (NaN frames,
-/// untracked or without markers, do not break the run). -1 when the series has no finite value.
-inline long converged_frame(const std::vector<double>& distance, double factor = 1.5) {
-  const double level = final_level(distance);
-  if (!std::isfinite(level)) return -1;
-  long first = 0;
+/// The first frame at which the filter has converged: the first measured frame from which the
+/// running median of the distance over the next `window` frames (one second, frames_per_second;
+/// fewer at the end) falls below `factor` times the median over the whole recording. NaN frames
+/// (untracked, without markers) are left out of both medians. A late fast phase does not move it:
+/// the rule looks forward from the start, it does not restart. -1 when no frame qualifies.
+inline long converged_frame(const std::vector<double>& distance, long window, double factor = 1.5) {
+  const double threshold = factor * quantile(distance, 0.5);
+  if (!std::isfinite(threshold)) return -1;
+  const std::size_t width = static_cast<std::size_t>(std::max(1L, window));
+  std::vector<double> ahead;
   for (std::size_t f = 0; f < distance.size(); ++f) {
-    if (!std::isfinite(distance[f])) {
-      if (static_cast<long>(f) == first) ++first;  // leading untracked frames
-      continue;
-    }
-    if (distance[f] > factor * level) first = static_cast<long>(f) + 1;
+    if (!std::isfinite(distance[f])) continue;
+    ahead.clear();
+    for (std::size_t k = f; k < std::min(distance.size(), f + width); ++k)
+      if (std::isfinite(distance[k])) ahead.push_back(distance[k]);
+    if (quantile(ahead, 0.5) < threshold) return static_cast<long>(f);
   }
-  return first;
+  return -1;
 }
 
 /// Mean of the finite values from `from` on.
@@ -52,6 +54,13 @@ inline double mean_from(const std::vector<double>& values, long from) {
   for (std::size_t f = static_cast<std::size_t>(std::max(0L, from)); f < values.size(); ++f)
     if (std::isfinite(values[f])) sum += values[f], ++count;
   return count ? sum / static_cast<double>(count) : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// The mean distance from converged_frame(distance, window) on: the level after convergence; NaN
+/// when the distance never converged.
+inline double level_after_convergence(const std::vector<double>& distance, long window) {
+  const long converged = converged_frame(distance, window);
+  return converged >= 0 ? mean_from(distance, converged) : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace s2kf::track

@@ -33,6 +33,7 @@ struct TrackingRun {
   StageTimes times;  ///< read, tracking, smoothing and writing (the sink's): filled by run_session
   long frames = 0;   ///< frames processed (rows produced), with or without a sink
   long frames_tracked = 0;
+  long frames_prediction_only = 0;  ///< tracked frames whose update failed (the prediction was kept)
 };
 
 /// One frame as run_tracking produces it, handed to a frame sink before on_frame is called. The
@@ -108,6 +109,7 @@ TrackingRun run_tracking(FrameTracker& tracker, NextFrame&& next_frame, double r
     if (e.tracked && e.status != FilterStatus::ok && e.status != FilterStatus::nothing_observed) {
       auto& [count, first] = failures.try_emplace(to_string(e.status), 0L, frame.index).first->second;
       ++count;
+      ++run.frames_prediction_only;
       (void)first;
     }
     if (on_frame) on_frame(index);
