@@ -18,6 +18,7 @@
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/subject_calibration.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
@@ -68,8 +69,11 @@ struct SessionOptions {
 /// What a recording is tracked with, ready to run.
 struct Session {
   body::MarkerSet marker_set;
-  body::BodyModel model;   ///< the set applied, scaled to the subject, calibrated when asked
-  MarkerMapping mapping;   ///< recording points -> model markers
+  body::BodyModel model;  ///< the set applied, scaled to the subject, calibrated when asked
+  MarkerMapping mapping;  ///< recording points -> model markers
+  /// Which segments the mapped markers observe; joints of segments no marker informs are written
+  /// as NaN by run_session.
+  SegmentObservation segments;
   TrackerOptions tracker;  ///< with the set's per-marker noise
   double rate_hz = 0;
   double height_mm = 0;
@@ -130,6 +134,21 @@ inline Session prepare_session(FrameSource& source, const body::MarkerSet& set, 
         "none of its " + std::to_string(source.labels().size()) +
         " point labels is a marker of the marker set " + set.name + " (expected names such as " +
         (set.entries.empty() ? std::string("none") : set.entries.front().label) + ")");
+  session.segments = observe_segments(model, session.mapping);
+  if (session.segments.markers[0] == used)
+    throw std::invalid_argument("only the pelvis carries markers of the marker set " + set.name + " (" +
+                                std::to_string(used) +
+                                " of them): nothing but the pelvis could be tracked; give a marker set that "
+                                "names the recording's other labels (--markerset)");
+  if (const std::vector<std::string> unobserved = session.segments.unobserved_segments();
+      !unobserved.empty()) {
+    std::string list;
+    for (const std::string& segment : unobserved) list += (list.empty() ? "" : ", ") + segment;
+    session.warnings.push_back("not observed: " + list +
+                               " (no marker of the set on them or beyond them); their " +
+                               std::to_string(session.segments.unobserved_joints.size()) +
+                               " joint angles are written as not observed (NaN), not estimated");
+  }
   if (used < session.tracker.min_markers_to_start)
     throw std::invalid_argument(
         "only " + std::to_string(used) + " of its labels are markers of the marker set " + set.name +
@@ -211,6 +230,8 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
     throw std::invalid_argument("smoothing works on the S2KF's estimates, not the baseline's");
   std::int64_t next = 0;
   std::string bad_coordinates;
+  std::vector<int> point_segment;  // per recording point: the segment its marker rides on, or -1
+  SegmentObservation observed = observe_segments(session.model, session.mapping, &point_segment);
   const auto next_frame = [&](MarkerFrame& frame) {
     if (!source.read(next, frame)) return false;
     ++next;
@@ -222,19 +243,45 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
           << ") mm, beyond a kilometre: the file's units or scale are wrong";
         throw std::invalid_argument(s.str());
       }
+    observed.count_frame(frame.visible, point_segment);
     if (hooks.on_read) hooks.on_read(frame);
     return true;
   };
   const std::vector<std::string> joint_names = session.model.joint_names();
+  // Joints no marker informs are written as NaN: the filter's value there is the prior's, not a
+  // measurement.
+  const std::vector<int>& unobserved = session.segments.unobserved_joints;
+  const auto blank = [&unobserved](auto&& row) {
+    for (int j : unobserved) row(body::kRootValues + j) = std::numeric_limits<double>::quiet_NaN();
+  };
+  FrameSink sink = hooks.sink;
+  Eigen::VectorXd blanked;
+  if (sink && !unobserved.empty())
+    sink = [&](const TrackedFrame& f) {
+      blanked = f.values;
+      blank(blanked);
+      hooks.sink(TrackedFrame{f.index, f.frame, f.time, blanked, f.mean_marker_distance, f.visible_markers,
+                              f.estimate});
+    };
+  const auto blank_table = [&](TrackingRun& run) {
+    for (Eigen::Index r = 0; r < run.motion.values.rows(); ++r) blank(run.motion.values.row(r));
+  };
   if (options.method == Method::baseline) {
     GradientBaseline baseline(session.model, session.mapping);
-    return run_tracking(baseline, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers,
-                        hooks.on_frame, hooks.sink);
+    TrackingRun run = run_tracking(baseline, next_frame, session.rate_hz, joint_names,
+                                   options.keep_predicted_markers, hooks.on_frame, sink);
+    blank_table(run);
+    run.segments = observed;
+    return run;
   }
   Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
-  if (!options.smooth)
-    return run_tracking(tracker, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers,
-                        hooks.on_frame, hooks.sink);
+  if (!options.smooth) {
+    TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
+                                   options.keep_predicted_markers, hooks.on_frame, sink);
+    blank_table(run);
+    run.segments = observed;
+    return run;
+  }
   TrackingSmoother smoother(tracker);
   const auto on_frame = [&](long index) {
     smoother.record(tracker, index);
@@ -243,6 +290,8 @@ inline TrackingRun run_session(const Session& session, FrameSource& source, cons
   TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
                                  options.keep_predicted_markers, on_frame);
   smoother.smooth(run.motion);
+  blank_table(run);
+  run.segments = observed;
   if (hooks.sink)
     for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {
       const auto f = static_cast<std::size_t>(r);

@@ -7,6 +7,7 @@
 
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <functional>
@@ -28,6 +29,8 @@ struct TrackingRun {
   std::vector<std::string> warnings;
   long frames = 0;  ///< frames processed (rows produced), with or without a sink
   long frames_tracked = 0;
+  /// run_session: per segment, the markers found and the frames in which none was visible.
+  SegmentObservation segments;
 };
 
 /// One frame as run_tracking produces it, handed to a frame sink before on_frame is called. The
