@@ -71,8 +71,8 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
                   {"reason",
                    "no marker of the set rides on these segments or on any segment beyond them, so "
                    "nothing in the recording tells their joint angles; they are written as not "
-                   "observed (NaN in the CSV, .mot and MMM files; the BVH, which cannot hold NaN, "
-                   "writes 0 there)"}};
+                   "observed (NaN in the CSV and its derivatives; 0 in .mot, BVH and MMM, which hold no "
+                   "missing values)"}};
   return {
       {"input", input},
       {"method", method},
