@@ -120,7 +120,7 @@ TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
       base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::VectorXd::Zero(base.joint_count()));
   for (const std::string& name : names) {
     const body::MarkerSet set = bundled(name);
-    EXPECT_NE(set.description.find("docs."), std::string::npos)
+    EXPECT_NE(set.description.find("Source: "), std::string::npos)
         << name << ": the description names no source";
     const body::BodyModel model = body::apply_marker_set(base, set);
     ASSERT_EQ(model.marker_count(), static_cast<int>(set.entries.size())) << name;
@@ -132,8 +132,12 @@ TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
       const double x = at_zero(0, m);
       const std::string canonical = canonical_label(label);
       const bool left = canonical[0] == 'L' && label != "L3", right = canonical[0] == 'R';
-      if (left && std::abs(x) > 20) EXPECT_LT(x, 0) << name << " " << label;
-      if (right && std::abs(x) > 20) EXPECT_GT(x, 0) << name << " " << label;
+      if (left && std::abs(x) > 20) {
+        EXPECT_LT(x, 0) << name << " " << label;
+      }
+      if (right && std::abs(x) > 20) {
+        EXPECT_GT(x, 0) << name << " " << label;
+      }
       const int frame = model.markers[static_cast<std::size_t>(m)].frame;
       EXPECT_LT((at_zero.col(m) - zero.origins[static_cast<std::size_t>(frame)]).norm(), 300)
           << name << " " << label;
