@@ -99,6 +99,31 @@ void write_marker_report_row(std::ostream& out, long frame, double time, double 
   out << "," << visible_markers << "\n";
 }
 
+/// The per-frame segment report PREFIX_segments.csv: per segment, the filter's largest standard
+/// deviation of its angles this frame (deg, segment_uncertainty_deg; "nan" where the frame was not
+/// filtered, e.g. rows replayed after smoothing).
+void write_segment_report_header(std::ostream& out, const track::SegmentObservation& segments) {
+  out << "frame,time";
+  for (const std::string& segment : segments.segments) out << "," << segment << "_sd_deg";
+  out << "\n";
+}
+void write_segment_report_row(std::ostream& out, const track::Session& session,
+                              const track::TrackedFrame& f) {
+  Eigen::VectorXd sd = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(session.segments.segments.size()),
+                                                 std::numeric_limits<double>::quiet_NaN());
+  if (f.estimate && f.estimate->tracked)
+    sd = track::segment_uncertainty_deg(session.model, session.segments, f.estimate->pose.joints,
+                                        f.estimate->covariance);
+  out << std::setprecision(6) << f.frame << "," << f.time;
+  for (Eigen::Index s = 0; s < sd.size(); ++s) {
+    if (std::isfinite(sd(s)))
+      out << "," << sd(s);
+    else
+      out << ",nan";
+  }
+  out << "\n";
+}
+
 /// The accuracy against a simulated recording's truth, as the summary's "truth" object.
 nlohmann::json truth_json(const track::TruthComparison& accuracy) {
   return {{"frames_compared", accuracy.frames},
@@ -238,11 +263,14 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   outside.writing = track::seconds_since(stage_start);
   std::ostream& marker_report = motion_files.companion(prefix + "_markers.csv");
   write_marker_report_header(marker_report);
+  std::ostream& segment_report = motion_files.companion(prefix + "_segments.csv");
+  write_segment_report_header(segment_report, session.segments);
   std::optional<body::Pose> figure_pose;  // the pose of frame --figure, when it was tracked
   hooks.sink = [&](const track::TrackedFrame& f) {
     throw_if_interrupted();
     motion_files.append(f.frame, f.time, f.values);
     write_marker_report_row(marker_report, f.frame, f.time, f.mean_marker_distance, f.visible_markers);
+    write_segment_report_row(segment_report, session, f);
     if (f.frame == settings.figure_frame && io::is_tracked_row(f.values))
       figure_pose = body::pose_from_row(f.values);
   };

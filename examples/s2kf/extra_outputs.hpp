@@ -84,6 +84,7 @@ inline std::vector<std::string> output_files(const std::string& prefix, const Ou
   if (settings.wants("trc")) files.push_back(prefix + ".trc");
   files.push_back(prefix + ".json");
   files.push_back(prefix + "_markers.csv");
+  files.push_back(prefix + "_segments.csv");
   return files;
 }
 

@@ -236,6 +236,7 @@ inline std::vector<std::string> marker_set_messages(const MarkerSetChoice& choic
   messages.push_back("marker set " + choice.set.name + " (" + choice.source +
                      "): " + std::to_string(mapping.markers_used()) + " of its " +
                      std::to_string(choice.set.entries.size()) + " markers are in the recording");
+  messages.insert(messages.end(), mapping.label_notes.begin(), mapping.label_notes.end());
   std::vector<std::string> ignored;
   for (const std::string& label : mapping.ignored_labels)
     if (!label.empty()) ignored.push_back(label);

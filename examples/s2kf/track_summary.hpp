@@ -66,6 +66,28 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
   nlohmann::json seconds_per_stage = nlohmann::json::object();
   for (const auto& [stage, seconds] : track::stage_list(session.times + run.times + outside))
     seconds_per_stage[stage] = seconds;
+  // Per segment: its markers, whether any marker informs it, how long none of its own was seen.
+  nlohmann::json segments = nlohmann::json::array();
+  const track::SegmentObservation& observed = run.segments;
+  for (std::size_t s = 0; s < observed.segments.size(); ++s) {
+    const long missing = observed.frames_without_marker[s];
+    segments.push_back(
+        {{"segment", observed.segments[s]},
+         {"markers", observed.markers[s]},
+         {"observed", static_cast<bool>(observed.informed[s])},
+         {"frames_without_marker", observed.markers[s] > 0 ? nlohmann::json(missing) : nullptr},
+         {"seconds_without_marker", observed.markers[s] > 0
+                                        ? nlohmann::json(static_cast<double>(missing) / session.rate_hz)
+                                        : nullptr}});
+  }
+  nlohmann::json unobserved = nullptr;
+  if (!observed.unobserved_segments().empty())
+    unobserved = {{"segments", observed.unobserved_segments()},
+                  {"reason",
+                   "no marker of the set rides on these segments or on any segment beyond them, so "
+                   "nothing in the recording tells their joint angles; they are written as not "
+                   "observed (NaN in the CSV and its derivatives; 0 in .mot, BVH and MMM, which hold no "
+                   "missing values)"}};
   return {
       {"input", input},
       {"method", method},
@@ -90,6 +112,8 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
        {{"median", track::quantile(latency_ms, 0.5)}, {"p99", track::quantile(latency_ms, 0.99)}}},
       {"seconds_per_stage", seconds_per_stage},
       {"samples", method == "s2kf" ? nlohmann::json(session.tracker.samples) : nlohmann::json(nullptr)},
+      {"segments", segments},
+      {"unobserved", unobserved},
       {"warnings", warnings},
   };
 }

@@ -8,6 +8,7 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/body/marker_set_labels.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/body/pose_columns.hpp>
 #include <s2kf/body/vector_sincos.hpp>

@@ -60,8 +60,8 @@ TEST(OutputOptions, FormatsWritesExactlyTheChosenFilesAndTheAlwaysWrittenOnes) {
   const std::string dir = scratch_directory("output_options_formats");
   const auto result = run_command(kFastTrack + " --formats csv,osim --out " + dir + "/run");
   ASSERT_EQ(result.status, 0) << result.output;
-  EXPECT_EQ(file_names_in(dir),
-            (std::set<std::string>{"run.csv", "run.osim", "run.json", "run_markers.csv"}));
+  EXPECT_EQ(file_names_in(dir), (std::set<std::string>{"run.csv", "run.osim", "run.json", "run_markers.csv",
+                                                       "run_segments.csv"}));
   EXPECT_EQ(lines_of(read_text_file(dir + "/run.csv")).size(), kHandstandFrames + 1u);
 }
 
@@ -69,8 +69,8 @@ TEST(OutputOptions, DerivativesWriteVelocityAndAccelerationWithTheCsvHeaderAndOn
   const std::string dir = scratch_directory("output_options_derivatives");
   const auto result = run_command(kFastTrack + " --formats csv --derivatives --out " + dir + "/run");
   ASSERT_EQ(result.status, 0) << result.output;
-  EXPECT_EQ(file_names_in(dir),
-            (std::set<std::string>{"run.csv", "run_vel.csv", "run_acc.csv", "run.json", "run_markers.csv"}));
+  EXPECT_EQ(file_names_in(dir), (std::set<std::string>{"run.csv", "run_vel.csv", "run_acc.csv", "run.json",
+                                                       "run_markers.csv", "run_segments.csv"}));
   const std::vector<std::string> motion = lines_of(read_text_file(dir + "/run.csv"));
   ASSERT_EQ(motion.size(), kHandstandFrames + 1u);
   ASSERT_EQ(motion[0].rfind("frame,time,root_x,root_y,root_z,root_roll,root_pitch,root_yaw,BPx,", 0), 0u);

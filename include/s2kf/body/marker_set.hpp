@@ -199,22 +199,4 @@ inline std::vector<std::string> marker_set_warnings(const BodyModel& base, const
   return warnings;
 }
 
-/// How well a recording's labels fit a set: the fraction of the set's markers whose label or an
-/// alias is among the labels (subject prefixes "Subject:" removed, blanks trimmed, case ignored).
-inline double marker_set_match(const std::vector<std::string>& recording_labels, const MarkerSet& set) {
-  if (set.entries.empty()) return 0.0;
-  std::vector<std::string> present;
-  for (const std::string& label : recording_labels) {
-    present.push_back(upper_case(strip_subject_prefix(label)));
-  }
-  int matched = 0;
-  for (const MarkerSetEntry& entry : set.entries) {
-    bool found = std::find(present.begin(), present.end(), upper_case(entry.label)) != present.end();
-    for (const std::string& alias : entry.aliases)
-      found = found || std::find(present.begin(), present.end(), upper_case(alias)) != present.end();
-    matched += found;
-  }
-  return static_cast<double>(matched) / static_cast<double>(set.entries.size());
-}
-
 }  // namespace s2kf::body

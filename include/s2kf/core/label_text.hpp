@@ -1,12 +1,14 @@
 /// @file
 /// Text helpers for names read from files (C3D labels and parameters, marker-set labels): bytes
 /// decoded to UTF-8, blanks trimmed, case folded (ASCII only: labels are matched byte for byte
-/// otherwise), subject prefixes.
+/// otherwise), subject prefixes, and the canonical spelling that lets `L_IAS`, `l-ias`, `Left IAS`
+/// and `LIAS` match.
 #pragma once
 
 #include <cctype>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace s2kf {
 
@@ -89,6 +91,72 @@ inline std::string strip_subject_prefix(const std::string& label) {
   const auto colon = label.rfind(':');
   return trim(colon == std::string::npos ? std::string_view(label)
                                          : std::string_view(label).substr(colon + 1));
+}
+
+/// The spelling-free form of a label, for matching labels written differently by different labs:
+/// the "Subject:" prefix removed, upper case, the separators `_`, `-`, `.` and blanks dropped, a side
+/// word (`Left`/`Right`, as the first word or, CamelCase or separated, as the last: `Knee_L`,
+/// `KneeLeft`) written as a leading L/R, and leading zeros of numbers dropped (cluster markers
+/// `LTH_01` = `LTH1`). So `L_IAS`, `l-ias`, `Left IAS`, `IAS_L` and `LIAS` are all "LIAS".
+inline std::string canonical_label(const std::string& label) {
+  const std::string text = strip_subject_prefix(label);
+  std::vector<std::string> words;  // split at separators and at a CamelCase "Left"/"Right" ending
+  std::string word;
+  const auto flush = [&] {
+    if (!word.empty()) words.push_back(word);
+    word.clear();
+  };
+  for (char c : text) {
+    if (c == '_' || c == '-' || c == '.' || c == ' ' || c == '\t')
+      flush();
+    else
+      word += c;
+  }
+  flush();
+  if (words.empty()) return "";
+  for (const char* side : {"Left", "Right"}) {
+    std::string& last = words.back();
+    const std::string_view s(side);
+    if (last.size() > s.size() && last.compare(last.size() - s.size(), s.size(), s) == 0 &&
+        std::islower(static_cast<unsigned char>(last[last.size() - s.size() - 1]))) {
+      last.erase(last.size() - s.size());
+      words.push_back(side);
+      break;
+    }
+  }
+  for (std::string& w : words) w = upper_case(w);
+  std::string side;
+  const auto side_letter = [](const std::string& w) -> std::string {
+    if (w == "L" || w == "LEFT") return "L";
+    if (w == "R" || w == "RIGHT") return "R";
+    return "";
+  };
+  if (words.size() > 1 && !side_letter(words.back()).empty()) {
+    side = side_letter(words.back());
+    words.pop_back();
+  } else if (words.size() > 1 && (words.front() == "LEFT" || words.front() == "RIGHT")) {
+    side = side_letter(words.front());
+    words.erase(words.begin());
+  } else if (words.front().size() > 5 && words.front().rfind("RIGHT", 0) == 0) {
+    side = "R";  // RightKnee
+    words.front().erase(0, 5);
+  } else if (words.front().size() > 4 && words.front().rfind("LEFT", 0) == 0) {
+    side = "L";  // LeftKnee
+    words.front().erase(0, 4);
+  }
+  std::string joined = side;
+  for (const std::string& w : words) joined += w;
+  std::string result;  // leading zeros of each number dropped
+  for (std::size_t i = 0; i < joined.size(); ++i) {
+    const bool digit = std::isdigit(static_cast<unsigned char>(joined[i])) != 0;
+    const bool starts_number = digit && (i == 0 || !std::isdigit(static_cast<unsigned char>(joined[i - 1])));
+    if (starts_number)
+      while (joined[i] == '0' && i + 1 < joined.size() &&
+             std::isdigit(static_cast<unsigned char>(joined[i + 1])))
+        ++i;
+    result += joined[i];
+  }
+  return result;
 }
 
 }  // namespace s2kf

@@ -126,7 +126,7 @@ class BvhSkeleton {
     for (int g : order_) {
       double channel[3] = {0, 0, 0};  // X, Y, Z
       for (int j : groups_[g].dofs) {
-        const double q = values(6 + j) * degrees;
+        const double q = angle_or_zero(values(6 + j)) * degrees;
         switch (axes_[j]) {
           case body::Axis::x:
             channel[0] = q;

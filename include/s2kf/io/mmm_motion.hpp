@@ -69,7 +69,7 @@ inline void write_mmm_kinematic_header(std::ostream& out, const std::vector<std:
 inline void write_mmm_joint_position(std::ostream& out, double time_s, const MotionRowRef& values) {
   out << std::setprecision(9) << "          <Measurement timestep=\"" << time_s << "\">\n"
       << "            <JointPosition>";
-  for (Eigen::Index c = 6; c < values.size(); ++c) out << (c > 6 ? " " : "") << values(c);
+  for (Eigen::Index c = 6; c < values.size(); ++c) out << (c > 6 ? " " : "") << angle_or_zero(values(c));
   out << "</JointPosition>\n"
       << "          </Measurement>\n";
 }

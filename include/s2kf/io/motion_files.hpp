@@ -49,9 +49,15 @@ inline std::vector<std::string> motion_columns(const std::vector<std::string>& j
 /// any vector of 6 + joints values). Rows of a column-major table bind without a copy.
 using MotionRowRef = Eigen::Ref<const Eigen::VectorXd, 0, Eigen::InnerStride<>>;
 
-/// A row is tracked when every value is finite; the formats below leave out (.mot) or fill in (BVH)
-/// the others.
-inline bool is_tracked_row(const MotionRowRef& values) { return values.allFinite(); }
+/// A row is tracked when its root values are finite; the formats below leave out (.mot) or fill in
+/// (BVH) the others. Joint angles of a tracked row may still be NaN: joints no marker observes
+/// (session.hpp), which the formats without missing values (.mot, BVH, MMM) write as angle_or_zero.
+inline bool is_tracked_row(const MotionRowRef& values) {
+  return values.head(std::min<Eigen::Index>(body::kRootValues, values.size())).allFinite();
+}
+
+/// A joint angle as the formats without missing values write it: 0 where it is not observed.
+inline double angle_or_zero(double angle) { return std::isfinite(angle) ? angle : 0.0; }
 
 /// The CSV header line of write_motion_csv.
 inline void write_motion_csv_header(std::ostream& out, const std::vector<std::string>& joint_names) {
@@ -99,7 +105,8 @@ inline void write_opensim_mot_header(std::ostream& out, const std::string& name,
 inline void write_opensim_mot_row(std::ostream& out, double time, const MotionRowRef& values) {
   const double degrees = kDegreesPerRadian;
   out << std::setprecision(9) << time;
-  for (Eigen::Index c = 0; c < values.size(); ++c) out << "\t" << values(c) * (c < 3 ? 0.001 : degrees);
+  for (Eigen::Index c = 0; c < values.size(); ++c)
+    out << "\t" << angle_or_zero(values(c)) * (c < 3 ? 0.001 : degrees);
   out << "\n";
 }
 

@@ -18,6 +18,9 @@ struct MarkerMapping {
   std::vector<int> point_of_marker;
   /// Recording labels that matched no model marker (after removing a "Subject:" prefix).
   std::vector<std::string> ignored_labels;
+  /// What was done to match labels beyond their exact names (case, spelling, a subject prefix),
+  /// one sentence each, for the summary.
+  std::vector<std::string> label_notes;
 
   int markers_used() const {
     return static_cast<int>(

@@ -19,6 +19,7 @@
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/subject_calibration.hpp>
 #include <s2kf/track/tracker.hpp>
@@ -72,8 +73,11 @@ struct SessionOptions {
 /// What a recording is tracked with, ready to run.
 struct Session {
   body::MarkerSet marker_set;
-  body::BodyModel model;   ///< the set applied, scaled to the subject, calibrated when asked
-  MarkerMapping mapping;   ///< recording points -> model markers
+  body::BodyModel model;  ///< the set applied, scaled to the subject, calibrated when asked
+  MarkerMapping mapping;  ///< recording points -> model markers
+  /// Which segments the mapped markers observe; joints of segments no marker informs are written
+  /// as NaN by run_session.
+  SegmentObservation segments;
   TrackerOptions tracker;  ///< with the set's per-marker noise
   double rate_hz = 0;
   double height_mm = 0;
@@ -139,6 +143,21 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
         "none of its " + std::to_string(source.labels().size()) +
         " point labels is a marker of the marker set " + set.name + " (expected names such as " +
         (set.entries.empty() ? std::string("none") : set.entries.front().label) + ")");
+  session.segments = observe_segments(model, session.mapping);
+  if (session.segments.markers[0] == used)
+    throw std::invalid_argument("only the pelvis carries markers of the marker set " + set.name + " (" +
+                                std::to_string(used) +
+                                " of them): nothing but the pelvis could be tracked; give a marker set that "
+                                "names the recording's other labels (--markerset)");
+  if (const std::vector<std::string> unobserved = session.segments.unobserved_segments();
+      !unobserved.empty()) {
+    std::string list;
+    for (const std::string& segment : unobserved) list += (list.empty() ? "" : ", ") + segment;
+    session.warnings.push_back("not observed: " + list +
+                               " (no marker of the set on them or beyond them); their " +
+                               std::to_string(session.segments.unobserved_joints.size()) +
+                               " joint angles are written as not observed (NaN), not estimated");
+  }
   if (used < session.tracker.min_markers_to_start)
     throw std::invalid_argument(
         "only " + std::to_string(used) + " of its labels are markers of the marker set " + set.name +
@@ -263,6 +282,8 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
   TimedFrameSource timed_source(source, times.read);
   std::int64_t next = 0;
   std::string bad_coordinates;
+  std::vector<int> point_segment;  // per recording point: the segment its marker rides on, or -1
+  SegmentObservation observed = observe_segments(session.model, session.mapping, &point_segment);
   const auto next_frame = [&](MarkerFrame& frame) {
     if (!timed_source.read(next, frame)) return false;
     ++next;
@@ -274,6 +295,7 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
           << ") mm, beyond a kilometre: the file's units or scale are wrong";
         throw std::invalid_argument(s.str());
       }
+    observed.count_frame(frame.visible, point_segment);
     if (hooks.on_read) hooks.on_read(frame);
     return true;
   };
@@ -292,15 +314,38 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
     return run;
   };
   const std::vector<std::string> joint_names = session.model.joint_names();
+  // Joints no marker informs are written as NaN: the filter's value there is the prior's, not a
+  // measurement.
+  const std::vector<int>& unobserved = session.segments.unobserved_joints;
+  const auto blank = [&unobserved](auto&& row) {
+    for (int j : unobserved) row(body::kRootValues + j) = std::numeric_limits<double>::quiet_NaN();
+  };
+  FrameSink sink = timed_sink;
+  Eigen::VectorXd blanked;
+  if (sink && !unobserved.empty())
+    sink = [&](const TrackedFrame& f) {
+      blanked = f.values;
+      blank(blanked);
+      timed_sink(TrackedFrame{f.index, f.frame, f.time, blanked, f.mean_marker_distance, f.visible_markers,
+                              f.estimate});
+    };
+  const auto blank_table = [&](TrackingRun& run) {
+    for (Eigen::Index r = 0; r < run.motion.values.rows(); ++r) blank(run.motion.values.row(r));
+  };
   if (options.method == Method::baseline) {
     GradientBaseline baseline(session.model, session.mapping);
-    return with_times(run_tracking(baseline, next_frame, session.rate_hz, joint_names,
-                                   options.keep_predicted_markers, hooks.on_frame, timed_sink));
+    TrackingRun run = run_tracking(baseline, next_frame, session.rate_hz, joint_names,
+                                   options.keep_predicted_markers, hooks.on_frame, sink);
+    blank_table(run);
+    run.segments = observed;
+    return with_times(std::move(run));
   }
   Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
   if (!options.smooth) {
     TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
-                                   options.keep_predicted_markers, hooks.on_frame, timed_sink);
+                                   options.keep_predicted_markers, hooks.on_frame, sink);
+    blank_table(run);
+    run.segments = observed;
     warn_about_rejected_markers(session.model, run);
     return with_times(std::move(run));
   }
@@ -316,6 +361,8 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
   const auto start = std::chrono::steady_clock::now();
   smoother.smooth(run.motion);
   times.smoothing += seconds_since(start);
+  blank_table(run);
+  run.segments = observed;
   warn_about_rejected_markers(session.model, run);
   if (timed_sink)
     for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {

@@ -8,6 +8,7 @@
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/track/stage_times.hpp>
+#include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <functional>
@@ -34,6 +35,8 @@ struct TrackingRun {
   long frames = 0;   ///< frames processed (rows produced), with or without a sink
   long frames_tracked = 0;
   long frames_prediction_only = 0;  ///< tracked frames whose update failed (the prediction was kept)
+  /// run_session: per segment, the markers found and the frames in which none was visible.
+  SegmentObservation segments;
 };
 
 /// One frame as run_tracking produces it, handed to a frame sink before on_frame is called. The
