@@ -28,7 +28,8 @@ struct Smoothed {
   body::BodyModel model;
 };
 
-Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0) {
+Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0,
+                          const track::TrackerOptions& options = {}) {
   const std::string base = std::string(S2KF_DATA_DIR) + "/" + name;
   const c3d::Recording recording = c3d::read_c3d(base + ".c3d");
   const io::MotionTable truth = io::load_motion_csv(base + "_truth.csv");
@@ -40,8 +41,7 @@ Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0) {
   for (Eigen::Index f = 0; f < recording.frame_count(); f += 5)
     heights.add_frame(recording.frame(f), recording.visible.col(f));
   model = model.scaled(heights.height_mm().value_or(1750));
-  track::Tracker tracker(model, mapping, track::TrackerOptions{}, recording.info.rate,
-                         test::tracker_samples());
+  track::Tracker tracker(model, mapping, options, recording.info.rate, test::tracker_samples());
   track::TrackingSmoother smoother(tracker);
   const Eigen::Index end = frames > 0 ? std::min(frames, recording.frame_count()) : recording.frame_count();
   Eigen::Index f = 0;
@@ -110,6 +110,27 @@ TEST(TrackingSmoother, StaysOnTheCartwheelThroughPitchNinetyDegrees) {
   EXPECT_LT(s.smoothed.all_joint_rms_deg, 1.03 * s.filtered.all_joint_rms_deg);
   EXPECT_LT(s.smoothed.segment_orientation_rms_deg, 1.1 * s.filtered.segment_orientation_rms_deg);
   EXPECT_EQ(s.smoothed.joint_limit_violations, 0);
+}
+
+track::TrackerOptions constant_velocity() {
+  track::TrackerOptions options;
+  options.motion_model = track::MotionModel::constant_velocity;
+  return options;
+}
+
+// The constant-velocity model keeps [pose, rates] and the smoother runs on the whole state with its
+// transition: smoothing must lower the error on a simulated motion and keep the joints in their
+// limits, also through the cartwheel's charts.
+TEST(TrackingSmoother, LowersTheErrorWithTheConstantVelocityModel) {
+  for (const char* name : {"walk", "cartwheel"}) {
+    const Smoothed s = track_and_smooth(name, 0, constant_velocity());
+    print(name, s.filtered);
+    print("smoothed", s.smoothed);
+    EXPECT_LT(s.smoothed.segment_orientation_rms_deg, s.filtered.segment_orientation_rms_deg) << name;
+    EXPECT_LT(s.smoothed.all_joint_rms_deg, s.filtered.all_joint_rms_deg) << name;
+    EXPECT_LT(s.smoothed.root_orientation_rms_deg, 1.02 * s.filtered.root_orientation_rms_deg) << name;
+    EXPECT_EQ(s.smoothed.joint_limit_violations, 0) << name;
+  }
 }
 
 TEST(TrackingSmoother, RejectsFramesThatAreNotConsecutive) {

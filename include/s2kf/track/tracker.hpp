@@ -9,6 +9,7 @@
 #include <s2kf/body/marker_measurement_model.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/constants.hpp>
+#include <s2kf/core/marginal_update.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 #include <s2kf/track/marker_mapping.hpp>
@@ -72,11 +73,29 @@ class Tracker {
     measurement_model_.select_markers(used_markers_);
     const int n = state_dimension();
     const double dt = 1.0 / rate_hz_;
-    process_noise_ = Eigen::MatrixXd::Zero(n, n);
+    const int d = motion_state_dimension();
+    process_noise_ = Eigen::MatrixXd::Zero(d, d);
     process_noise_.diagonal().segment<3>(0).setConstant(std::pow(options_.position_speed_mm_per_s * dt, 2));
     process_noise_.diagonal().segment<3>(3).setConstant(
         std::pow(options_.orientation_speed_rad_per_s * dt, 2));
-    process_noise_.diagonal().tail(joint_count()).setConstant(std::pow(options_.joint_speed_per_s * dt, 2));
+    process_noise_.diagonal()
+        .segment(kRootDofs, joint_count())
+        .setConstant(std::pow(options_.joint_speed_per_s * dt, 2));
+    transition_ = Eigen::MatrixXd::Identity(d, d);
+    if (with_rates()) {
+      // White-noise acceleration of spectral density q per component: the exact discretisation
+      // of x' = v, v' = a over dt.
+      transition_.topRightCorner(n, n).diagonal().setConstant(dt);
+      for (int k = 0; k < n; ++k) {
+        const double a = k < 3           ? options_.position_acceleration
+                         : k < kRootDofs ? options_.orientation_acceleration
+                                         : options_.joint_acceleration;
+        const double q = a * a;
+        process_noise_(k, k) += q * dt * dt * dt / 3;
+        process_noise_(k, n + k) = process_noise_(n + k, k) = q * dt * dt / 2;
+        process_noise_(n + k, n + k) = q * dt;
+      }
+    }
     const Eigen::Index m = 3 * static_cast<Eigen::Index>(used_markers_.size());
     if (!options_.marker_noise_mm_per_marker.empty() &&
         options_.marker_noise_mm_per_marker.size() != static_cast<std::size_t>(model_.marker_count()))
@@ -96,6 +115,10 @@ class Tracker {
 
   int joint_count() const { return model_.joint_count(); }
   int state_dimension() const { return kRootDofs + model_.joint_count(); }
+  /// The whole state the motion model moves: the pose (state_dimension()), and with the
+  /// constant-velocity model its rate of change as well (twice as many).
+  int motion_state_dimension() const { return with_rates() ? 2 * state_dimension() : state_dimension(); }
+  bool with_rates() const { return options_.motion_model == MotionModel::constant_velocity; }
   const body::BodyModel& model() const { return model_; }
   const MarkerMapping& mapping() const { return mapping_; }
   const TrackerOptions& options() const { return options_; }
@@ -106,9 +129,14 @@ class Tracker {
   /// The filter's posterior after the last frame: [root position (mm), orientation error about
   /// reference_rotation() (rad, zero after an update), Theta (40)]; what offline smoothing keeps.
   const GaussianXd& state() const { return state_; }
+  /// The posterior of the whole state after the last frame: state() with, for the
+  /// constant-velocity model, the rates (reference_rotation()'s axes, per second) appended.
+  const GaussianXd& motion_state() const { return with_rates() ? motion_ : state_; }
   const Eigen::Matrix3d& reference_rotation() const { return reference_rotation_; }
-  /// Q of the random-walk prediction between two frames.
+  /// The prediction between two frames: x <- transition() x + w, w ~ N(0, process_noise()), on the
+  /// motion state (identity for the random walk).
   const Eigen::MatrixXd& process_noise() const { return process_noise_; }
+  const Eigen::MatrixXd& transition() const { return transition_; }
 
   /// One frame: the recording's points (3 x P, mm, in recording order) and which are visible.
   /// Non-finite coordinates count as not visible.
@@ -137,6 +165,8 @@ class Tracker {
         finish(points, visible, start);
         return estimate_;
       }
+    } else if (with_rates()) {
+      predict_constant_velocity();
     } else {
       filter_.predict_random_walk(state_, process_noise_);
     }
@@ -154,7 +184,10 @@ class Tracker {
           filter_.update(state_, measurement_model_, measurement_, noise_, observed_, update_options);
       estimate_.status = result.status;
       estimate_.nis = result.nis;
-      if (result.ok()) recentre();
+      if (result.ok()) {
+        if (with_rates()) condition_rates();
+        recentre();
+      }
     }
     estimate_.tracked = true;
     finish(points, visible, start);
@@ -221,16 +254,67 @@ class Tracker {
       }
     }
     state_.covariance.diagonal().tail(joint_count()).setConstant(std::pow(options_.initial_joint_sd, 2));
+    if (with_rates()) {
+      motion_.mean = Eigen::VectorXd::Zero(2 * n);  // at rest
+      motion_.covariance = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+      motion_.covariance.topLeftCorner(n, n) = state_.covariance;
+      motion_.covariance.diagonal().segment<3>(n).setConstant(std::pow(options_.initial_position_rate_sd, 2));
+      motion_.covariance.diagonal().segment<3>(n + 3).setConstant(
+          std::pow(options_.initial_orientation_rate_sd, 2));
+      motion_.covariance.diagonal()
+          .tail(joint_count())
+          .setConstant(std::pow(options_.initial_joint_rate_sd, 2));
+    }
     initialised_ = true;
     frames_since_start_ = 0;
   }
 
+  /// x <- A x + w with A = [I dt I; 0 I] (transition()), written out by blocks: the same result as
+  /// the core's predict_linear (a test compares them) in O(n^2) rather than two dense 92 x 92
+  /// products, which would cost more than the rest of a frame at L = 301.
+  void predict_constant_velocity() {
+    const Eigen::Index n = state_dimension();
+    const double dt = 1.0 / rate_hz_;
+    Eigen::VectorXd& m = motion_.mean;
+    Eigen::MatrixXd& c = motion_.covariance;
+    m.head(n) += dt * m.tail(n);
+    // C_pp += dt (C_pv + C_vp) + dt^2 C_vv, C_pv += dt C_vv (and C_vp as its transpose), then + Q.
+    c.topLeftCorner(n, n) +=
+        dt * (c.topRightCorner(n, n) + c.bottomLeftCorner(n, n)) + (dt * dt) * c.bottomRightCorner(n, n);
+    c.topRightCorner(n, n) += dt * c.bottomRightCorner(n, n);
+    c.bottomLeftCorner(n, n) = c.topRightCorner(n, n).transpose();
+    c += process_noise_;
+    state_.mean = m.head(n);
+    state_.covariance = c.topLeftCorner(n, n);
+  }
+
+  /// The measurement sees the pose only: the rates follow the pose's correction by linear-Gaussian
+  /// conditioning (core/marginal_update.hpp), exact for the Gaussian prior, where sampling the
+  /// doubled state would double the sample dimension. A failed factorisation keeps the rates as
+  /// predicted, with the pose part replaced.
+  void condition_rates() {
+    if (marginal_update_.apply(motion_, state_)) return;
+    motion_.mean.head(state_dimension()) = state_.mean;
+    motion_.covariance.topLeftCorner(state_dimension(), state_dimension()) = state_.covariance;
+  }
+
   /// Folds the orientation error into the reference and every Theta onto the principal branch
-  /// (state_chart.hpp).
+  /// (state_chart.hpp); with rates, the orientation rate turns with the reference and a reflected
+  /// Theta's rate changes sign.
   void recentre() {
+    const Eigen::Matrix3d turn = body::rotation_exp(state_.mean.segment<3>(3));
     measurement_model_.recenter(state_.mean);
     reference_rotation_ = measurement_model_.reference_orientation();
-    fold_joint_parameters(state_.mean, state_.covariance);
+    if (!with_rates()) {
+      fold_joint_parameters(state_.mean, state_.covariance);
+      return;
+    }
+    motion_.mean.segment<3>(3).setZero();
+    turn_orientation_rate(motion_.mean, motion_.covariance, turn);
+    fold_joint_parameters(motion_.mean, motion_.covariance, true);
+    const Eigen::Index n = state_dimension();
+    state_.mean = motion_.mean.head(n);
+    state_.covariance = motion_.covariance.topLeftCorner(n, n);
   }
 
   void finish(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible,
@@ -283,9 +367,11 @@ class Tracker {
   body::MarkerMeasurementModel measurement_model_;
   body::MarkerMeasurementModel mean_markers_model_;  ///< every model marker, for the reported pose
   std::vector<int> used_markers_;
-  GaussianXd state_;
+  GaussianXd state_;   ///< the pose posterior (what the update works on)
+  GaussianXd motion_;  ///< constant velocity: [pose, rates]; its pose part equals state_ between frames
+  MarginalUpdate marginal_update_;
   Eigen::Matrix3d reference_rotation_ = Eigen::Matrix3d::Identity();
-  Eigen::MatrixXd process_noise_, noise_;
+  Eigen::MatrixXd process_noise_, transition_, noise_;
   Eigen::VectorXd measurement_;
   ObservedMask observed_;
   FrameEstimate estimate_;
