@@ -4,7 +4,7 @@
 beside the true-subject reference. Prints a Markdown table and the means over the runs.
 
     scripts/accuracy-table.py [--s2kf build/s2kf] [--motions walk,...] [--seeds 1,2,3] [--out DIR]
-                              [--occlusion none,paper] [--extra "--no-calibrate"]
+                              [--occlusion none,paper] [--extra=--no-calibrate]
 """
 import argparse
 import json

@@ -103,7 +103,8 @@ void run_calibrate(const CalibrateSettings& settings) {
       {"marker_set_source", choice.source},
       {"height_mm", height},
       {"height_source", height_source},
-      {"frames", std::min<long>(settings.frames, static_cast<long>(info.frame_count))},
+      {"frames", session.calibration_frames},
+      {"stretches", session.calibration_stretches},
       {"iterations", settings.iterations},
       {"segment_scale", calibration.segment_scale},
       {"passes", passes},
@@ -136,7 +137,9 @@ const RegisterCommand calibrate_registration{
       app.add_option("--iterations", settings->iterations,
                      "rounds of tracking and bundle adjustment (default 1)")
           ->check(CLI::Range(1, 20));
-      app.add_option("--frames", settings->frames, "frames from the start used (default 1200)")
+      app.add_option("--frames", settings->frames,
+                     "frames used at most (default 1200): all of a shorter recording, else 4 stretches "
+                     "spread over it")
           ->check(CLI::Range(10L, 1000000L));
       app.add_flag("--no-scales", settings->no_scales,
                    "keep the bone lengths, estimate the marker offsets only");

@@ -35,9 +35,11 @@ struct TrackerOptions {
   /// Constant velocity: spectral density sqrt(q) of the white-noise acceleration of the root
   /// position (mm s^-1.5), orientation (rad s^-1.5) and Theta (s^-1.5); over one frame of dt the
   /// velocity's SD grows by sqrt(q dt), and Q = q [dt^3/3, dt^2/2; dt^2/2, dt] per component.
-  double position_acceleration = 3000.0;
-  double orientation_acceleration = 15.0;
-  double joint_acceleration = 20.0;
+  /// The defaults are the best of the levels tried on the simulated motions (docs/tracking.md);
+  /// larger ones (300 mm, 3, 3 and above) let the rates chase soft tissue and diverge.
+  double position_acceleration = 100.0;
+  double orientation_acceleration = 1.0;
+  double joint_acceleration = 1.0;
   /// Constant velocity: SD of the velocity when tracking starts (the pose's units per second).
   double initial_position_rate_sd = 1000.0;
   double initial_orientation_rate_sd = 3.0;
