@@ -48,7 +48,6 @@ void run_calibrate(const CalibrateSettings& settings) {
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
-  const c3d::C3dInfo& info = source->info();
   const MarkerSetChoice choice = choose_marker_set_for(source->labels(), settings.markerset, "");
   track::SessionOptions options;
   options.height_mm = settings.height_mm;
