@@ -29,6 +29,7 @@ TEST(Session, FileAndMemorySourcesGiveTheSameSessionAndRun) {
   ASSERT_EQ(file.labels(), head.labels);
   track::SessionOptions options;
   options.calibration_frames = 150;
+  options.calibration_windows = 1;  // the first 150 frames of the file: the memory source's frames
   const SampleSet& samples = test::tracker_samples();
   const track::Session from_file = track::prepare_session(file, kit_like_set(), options, samples);
   // The height estimate reads spread frames of the whole file; give the memory source the same.
