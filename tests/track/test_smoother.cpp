@@ -112,12 +112,6 @@ TEST(TrackingSmoother, StaysOnTheCartwheelThroughPitchNinetyDegrees) {
   EXPECT_EQ(s.smoothed.joint_limit_violations, 0);
 }
 
-track::TrackerOptions constant_velocity() {
-  track::TrackerOptions options;
-  options.motion_model = track::MotionModel::constant_velocity;
-  return options;
-}
-
 // The constant-velocity model keeps [pose, rates] and the smoother runs on the whole state with its
 // transition. On the walk it must lower the error; on the cartwheel, whose orientation charts change
 // fastest, it must keep it (measured: walk segments 9.06 -> 8.65 deg, all joints 9.90 -> 9.71,
