@@ -76,10 +76,12 @@ struct Scenario {
 };
 
 /// A tracker with L samples that has run the first kWarmupFrames frames (every marker visible).
-track::Tracker warmed_tracker(int samples) {
+track::Tracker warmed_tracker(int samples,
+                              track::MotionModel motion_model = track::TrackerOptions{}.motion_model) {
   const Scenario& s = Scenario::get();
   track::TrackerOptions options;
   options.samples = samples;
+  options.motion_model = motion_model;
   track::Tracker tracker(s.model, s.mapping, options, s.rate, lcd_sample_set(46, options.samples).set);
   for (int f = 0; f < kWarmupFrames; ++f) tracker.process(s.frames[f], s.all_visible[f]);
   return tracker;
@@ -195,6 +197,26 @@ void BM_TrackStep(benchmark::State& state) {
   state.counters["failed_updates"] = static_cast<double>(failures);
 }
 BENCHMARK(BM_TrackStep)->Apply(add_args);
+
+// The same step with the constant-velocity model (92-state prediction, the 46-dimensional sampled
+// update, the rates conditioned on it): the latency it adds at the same L.
+void BM_TrackStepConstantVelocity(benchmark::State& state) {
+  const int samples = static_cast<int>(state.range(0));
+  const Scenario& s = Scenario::get();
+  const auto& visibility = s.visibility(static_cast<int>(state.range(1)));
+  track::Tracker tracker = warmed_tracker(samples, track::MotionModel::constant_velocity);
+  std::size_t f = kWarmupFrames;
+  for (auto _ : state) {
+    const track::FrameEstimate& e = tracker.process(s.frames[f], visibility[f]);
+    benchmark::DoNotOptimize(e.pose.joints.data());
+    if (++f == s.frames.size()) f = kWarmupFrames;
+  }
+}
+BENCHMARK(BM_TrackStepConstantVelocity)
+    ->Args({301, 50})
+    ->Args({301, 34})
+    ->ArgNames({"L", "visible"})
+    ->Unit(benchmark::kMicrosecond);
 
 // The floor alone, and its two halves.
 void BM_Floor(benchmark::State& state) {

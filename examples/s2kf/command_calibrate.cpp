@@ -48,7 +48,6 @@ void run_calibrate(const CalibrateSettings& settings) {
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
-  const c3d::C3dInfo& info = source->info();
   const MarkerSetChoice choice = choose_marker_set_for(source->labels(), settings.markerset, "");
   track::SessionOptions options;
   options.height_mm = settings.height_mm;
@@ -103,7 +102,8 @@ void run_calibrate(const CalibrateSettings& settings) {
       {"marker_set_source", choice.source},
       {"height_mm", height},
       {"height_source", height_source},
-      {"frames", std::min<long>(settings.frames, static_cast<long>(info.frame_count))},
+      {"frames", session.calibration_frames},
+      {"stretches", session.calibration_stretches},
       {"iterations", settings.iterations},
       {"segment_scale", calibration.segment_scale},
       {"passes", passes},
@@ -136,7 +136,9 @@ const RegisterCommand calibrate_registration{
       app.add_option("--iterations", settings->iterations,
                      "rounds of tracking and bundle adjustment (default 1)")
           ->check(CLI::Range(1, 20));
-      app.add_option("--frames", settings->frames, "frames from the start used (default 1200)")
+      app.add_option("--frames", settings->frames,
+                     "frames used at most (default 1200): all of a shorter recording, else 4 stretches "
+                     "spread over it")
           ->check(CLI::Range(10L, 1000000L));
       app.add_flag("--no-scales", settings->no_scales,
                    "keep the bone lengths, estimate the marker offsets only");

@@ -1,16 +1,21 @@
 // `s2kf evaluate`: the paper's evaluation (section 5) reproduced and extended: the S2KF and the
 // per-frame gradient baseline on one recording, the occlusion Monte Carlo, the sample-count
 // sweep, accuracy against ground truth; CSV series, gnuplot figures and a summary.json.
+#include "bundled_motions.hpp"
 #include "command.hpp"
 #include "gnuplot.hpp"
 #include "marker_set_json.hpp"
+#include "motion_json.hpp"
 #include "tracker_samples.hpp"
 
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/sim/recording.hpp>
+#include <s2kf/sim/subject.hpp>
 #include <s2kf/track/evaluation.hpp>
+#include <s2kf/track/true_subject_reference.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -43,6 +48,11 @@ struct EvaluateSettings {
   long warmup = 20;
   bool calibrate = true;
   bool quiet = false;
+  std::string motion;              ///< simulate this motion instead of reading a recording
+  std::uint64_t subject_seed = 1;  ///< the simulated subject's (and its noise's) seed
+  std::string occlusion;           ///< p,lambda: random occlusion of the simulated recording
+  bool smooth = false;             ///< also the S2KF with the RTS smoother, against the truth
+  std::string motion_model = "random-walk";
 };
 
 /// The sample count the comparison and the Monte Carlo use: the tracker's default when listed.
@@ -88,6 +98,21 @@ std::string machine_name() {
   return "unknown";
 }
 
+json truth_json(const track::TruthComparison& t) {
+  json segments = json::object();
+  for (const auto& [name, rms] : t.segment_rms_deg) segments[name] = number(rms);
+  return {{"frames_compared", t.frames},
+          {"segment_orientation_rms_deg", t.segment_orientation_rms_deg},
+          {"limb_flexion_rms_deg", t.limb_flexion_rms_deg},
+          {"all_joint_rms_deg", t.all_joint_rms_deg},
+          {"worst_joint", t.worst_joint},
+          {"worst_joint_rms_deg", t.worst_joint_rms_deg},
+          {"root_position_rms_mm", t.root_position_rms_mm},
+          {"root_orientation_rms_deg", t.root_orientation_rms_deg},
+          {"joint_limit_violations", t.joint_limit_violations},
+          {"segment_rms_deg", segments}};
+}
+
 json result_json(const track::MethodResult& r) {
   json j = {{"method", track::to_string(r.method)},
             {"samples", r.samples ? json(r.samples) : json(nullptr)},
@@ -98,19 +123,34 @@ json result_json(const track::MethodResult& r) {
             {"worst_marker_distance_mm", number(r.worst_all_frames_mm)},
             {"latency_ms",
              {{"median", number(r.median_ms)}, {"p99", number(r.p99_ms)}, {"max", number(r.max_ms)}}}};
-  if (r.truth) {
-    const track::TruthComparison& t = *r.truth;
-    j["truth"] = {{"frames_compared", t.frames},
-                  {"segment_orientation_rms_deg", t.segment_orientation_rms_deg},
-                  {"limb_flexion_rms_deg", t.limb_flexion_rms_deg},
-                  {"all_joint_rms_deg", t.all_joint_rms_deg},
-                  {"worst_joint", t.worst_joint},
-                  {"worst_joint_rms_deg", t.worst_joint_rms_deg},
-                  {"root_position_rms_mm", t.root_position_rms_mm},
-                  {"root_orientation_rms_deg", t.root_orientation_rms_deg},
-                  {"joint_limit_violations", t.joint_limit_violations}};
-  }
+  if (r.truth) j["truth"] = truth_json(*r.truth);
   return j;
+}
+
+/// A recording simulated here, with the subject it was drawn on (for the true-subject reference).
+struct Simulated {
+  sim::Subject subject;
+  sim::Recording recording;
+};
+
+Simulated simulate_for_evaluation(const EvaluateSettings& settings) {
+  if (!settings.recording.empty() || !settings.truth.empty())
+    throw UserError("--motion simulates the recording and its truth: give no recording or --truth with it");
+  sim::SubjectOptions subject_options;  // the realistic defaults (docs/simulation.md)
+  const body::BodyModel base = body::mmm_body_model(subject_options.height_mm);
+  Simulated simulated{sim::make_subject(base, subject_options, settings.subject_seed), {}};
+  sim::RecordingOptions options;
+  options.frames = settings.frames;
+  if (!settings.occlusion.empty()) options.occlusion = occlusion_option(settings.occlusion);
+  const std::filesystem::path file = resolve_motion(settings.motion);
+  try {
+    const JointTable joints{simulated.subject.joint_names, simulated.subject.lower, simulated.subject.upper};
+    const sim::KeyframeMotion motion = load_motion_file(file, joints, settings.subject_seed);
+    simulated.recording = sim::simulate_recording(motion, simulated.subject, options, settings.subject_seed);
+  } catch (const std::exception& e) {
+    throw UserError(file.string() + ": " + e.what());
+  }
+  return simulated;
 }
 
 void write_csv(const fs::path& path, const std::string& header, std::size_t rows,
@@ -136,18 +176,27 @@ void run_evaluate(const EvaluateSettings& settings) {
       std::cerr << "evaluate [" << std::fixed << std::setprecision(0) << elapsed() << " s] " << text << "\n";
   };
 
-  // Inputs.
+  // Inputs: a recording (with its truth when there is one), or a motion simulated here.
   std::string recording_path = settings.recording, truth_path = settings.truth;
-  if (recording_path.empty()) {
-    recording_path = std::string(S2KF_DATA_DIR) + "/handstand.c3d";
-    if (truth_path.empty()) truth_path = std::string(S2KF_DATA_DIR) + "/handstand_truth.csv";
-  } else if (truth_path.empty()) {
-    const fs::path beside =
-        fs::path(recording_path).parent_path() / (fs::path(recording_path).stem().string() + "_truth.csv");
-    if (fs::exists(beside)) truth_path = beside.string();
+  std::optional<Simulated> simulated;
+  if (!settings.motion.empty()) {
+    simulated = simulate_for_evaluation(settings);
+    recording_path = "simulated " + settings.motion + " (subject seed " +
+                     std::to_string(settings.subject_seed) +
+                     (settings.occlusion.empty() ? "" : ", occlusion " + settings.occlusion) + ")";
+  } else {
+    if (!settings.occlusion.empty()) throw UserError("--occlusion applies to a simulated --motion only");
+    if (recording_path.empty()) {
+      recording_path = std::string(S2KF_DATA_DIR) + "/handstand.c3d";
+      if (truth_path.empty()) truth_path = std::string(S2KF_DATA_DIR) + "/handstand_truth.csv";
+    } else if (truth_path.empty()) {
+      const fs::path beside =
+          fs::path(recording_path).parent_path() / (fs::path(recording_path).stem().string() + "_truth.csv");
+      if (fs::exists(beside)) truth_path = beside.string();
+    }
+    if (!fs::exists(recording_path)) throw UserError(recording_path + ": no such file");
+    if (!truth_path.empty() && !fs::exists(truth_path)) throw UserError(truth_path + ": no such file");
   }
-  if (!fs::exists(recording_path)) throw UserError(recording_path + ": no such file");
-  if (!truth_path.empty() && !fs::exists(truth_path)) throw UserError(truth_path + ": no such file");
   const std::vector<int> sample_counts = parse_samples(settings.samples);
   const int main_samples =
       std::find(sample_counts.begin(), sample_counts.end(), kDefaultSamples) != sample_counts.end()
@@ -155,10 +204,14 @@ void run_evaluate(const EvaluateSettings& settings) {
           : sample_counts.front();
 
   MarkerSequence complete;
-  try {
-    complete = c3d::read_c3d(recording_path);
-  } catch (const std::exception& e) {
-    throw UserError(e.what());
+  if (simulated) {
+    complete = simulated->recording;
+  } else {
+    try {
+      complete = c3d::read_c3d(recording_path);
+    } catch (const std::exception& e) {
+      throw UserError(e.what());
+    }
   }
   const Eigen::Index recorded_frames = complete.frame_count();
   if (settings.frames > 0 && settings.frames < complete.frame_count())
@@ -171,13 +224,17 @@ void run_evaluate(const EvaluateSettings& settings) {
     const MarkerSetChoice choice = choose_marker_set_for(complete.labels, "", "");
     track::SessionOptions options;
     options.calibrate = settings.calibrate;
+    options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
     setup =
         track::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(recording_path + ": " + e.what());
   }
   std::optional<io::MotionTable> truth;
-  if (!truth_path.empty()) {
+  if (simulated) {
+    truth = sim::truth_motion(simulated->recording, setup.model.joint_names());
+    truth_path = "simulated";
+  } else if (!truth_path.empty()) {
     try {
       truth = io::load_motion_csv(truth_path);
       track::check_truth(*truth, setup, recorded_frames);
@@ -208,6 +265,24 @@ void run_evaluate(const EvaluateSettings& settings) {
   const track::MethodResult baseline =
       track::evaluate_method(setup, complete, track::Method::baseline, 0, truth_ptr, settings.warmup);
   say("baseline: " + cell(baseline.level_mm) + " mm, median " + cell(baseline.median_ms) + " ms per frame");
+
+  // The reachable reference (simulated input only) and the smoothed S2KF, against the truth.
+  std::optional<track::TruthComparison> reference, smoothed;
+  if (simulated) {
+    reference = track::compare_with_truth(setup.model,
+                                          track::true_subject_fit(simulated->subject, simulated->recording),
+                                          *truth, settings.warmup);
+    say("true-subject fit: segment orientation RMS " + cell(reference->segment_orientation_rms_deg) + " deg");
+  }
+  if (settings.smooth && truth) {
+    SequenceFrameSource source(complete);
+    track::RunOptions run_options;
+    run_options.smooth = true;
+    const track::TrackingRun run =
+        track::run_session(setup, source, cached_sample_set(46, setup.tracker.samples), run_options);
+    smoothed = track::compare_with_truth(setup.model, run.motion, *truth, settings.warmup);
+    say("smoothed S2KF: segment orientation RMS " + cell(smoothed->segment_orientation_rms_deg) + " deg");
+  }
 
   // The occlusion Monte Carlo.
   track::OcclusionOptions occlusion_options;
@@ -410,6 +485,8 @@ void run_evaluate(const EvaluateSettings& settings) {
                   {"baseline", result_json(baseline)},
                   {"occlusion", occlusion_json},
                   {"sample_sweep", sweep_json},
+                  {"true_subject_reference", reference ? truth_json(*reference) : json(nullptr)},
+                  {"s2kf_smoothed", smoothed ? truth_json(*smoothed) : json(nullptr)},
                   {"files", written},
                   {"figure_problems", figure_problems},
                   {"seconds", elapsed()}};
@@ -423,8 +500,27 @@ void run_evaluate(const EvaluateSettings& settings) {
               << cell(baseline.median_ms) << " ms per frame.\nOcclusion (" << study.runs << " runs, "
               << cell(study.mean_hidden_overall) << " of " << study.markers
               << " markers hidden on average): S2KF up to " << cell(study.s2kf_worst_mm) << " mm after frame "
-              << settings.warmup << ".\nWrote " << written.size() << " files and summary.json to "
-              << out.string() << ".\n";
+              << settings.warmup << ".\n";
+    if (s2kf.truth) {
+      const auto beside = [&](const char* what, double value, double ref, const char* unit) {
+        std::cout << "  " << what << " " << cell(value) << " " << unit;
+        if (reference) std::cout << " (true-subject fit " << cell(ref) << ")";
+        std::cout << "\n";
+      };
+      const track::TruthComparison& t = *s2kf.truth;
+      const track::TruthComparison r = reference ? *reference : track::TruthComparison{};
+      std::cout << "Against the truth after frame " << settings.warmup << ", S2KF:\n";
+      beside("segment orientation RMS", t.segment_orientation_rms_deg, r.segment_orientation_rms_deg, "deg");
+      beside("limb flexion RMS", t.limb_flexion_rms_deg, r.limb_flexion_rms_deg, "deg");
+      beside("root orientation RMS", t.root_orientation_rms_deg, r.root_orientation_rms_deg, "deg");
+      beside("joint-limit violations", static_cast<double>(t.joint_limit_violations),
+             static_cast<double>(r.joint_limit_violations), "");
+      if (smoothed)
+        std::cout << "  smoothed: segment orientation RMS " << cell(smoothed->segment_orientation_rms_deg)
+                  << " deg, limb flexion RMS " << cell(smoothed->limb_flexion_rms_deg)
+                  << " deg, root orientation RMS " << cell(smoothed->root_orientation_rms_deg) << " deg\n";
+    }
+    std::cout << "Wrote " << written.size() << " files and summary.json to " << out.string() << ".\n";
   }
 }
 
@@ -455,6 +551,18 @@ const RegisterCommand evaluate_registration{
           "!--no-calibrate", settings->calibrate,
           "evaluate with the marker set as it is (default: calibrate the subject first, as s2kf track does)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
+      app.add_option("--motion", settings->motion,
+                     "simulate this bundled motion (or motion .json) on a realistic subject instead of "
+                     "reading a recording; adds the true-subject reference");
+      app.add_option("--subject-seed", settings->subject_seed,
+                     "seed of the simulated subject and its sensor noise (default 1)");
+      app.add_option("--occlusion", settings->occlusion,
+                     "random occlusion p,lambda of the simulated recording (the paper: 0.005,100)");
+      app.add_option("--motion-model", settings->motion_model,
+                     "S2KF system model: random-walk (default) or constant-velocity")
+          ->check(CLI::IsMember({"random-walk", "constant-velocity"}));
+      app.add_flag("--smooth", settings->smooth,
+                   "also track with the RTS smoother and compare it with the truth");
       app.callback([settings] { run_evaluate(*settings); });
     }};
 

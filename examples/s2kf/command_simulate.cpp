@@ -1,4 +1,5 @@
 // `s2kf simulate`: a synthetic recording with ground truth (C3D + _truth.csv + _clean.csv).
+#include "bundled_motions.hpp"
 #include "command.hpp"
 #include "motion_json.hpp"
 
@@ -24,56 +25,10 @@
 namespace {
 
 namespace fs = std::filesystem;
+using s2kf::cli::motion_names;
+using s2kf::cli::number_pair;
+using s2kf::cli::resolve_motion;
 using s2kf::cli::UserError;
-
-fs::path data_directory() {
-  if (const char* from_environment = std::getenv("S2KF_DATA_DIR"); from_environment && *from_environment)
-    return from_environment;
-#ifdef S2KF_DATA_DIR
-  return S2KF_DATA_DIR;
-#else
-  return fs::path(__FILE__).parent_path().parent_path().parent_path() / "data";
-#endif
-}
-
-fs::path motions_directory() { return data_directory() / "motions"; }
-
-std::vector<std::string> motion_names() {
-  std::vector<std::string> names;
-  std::error_code error;
-  for (const auto& entry : fs::directory_iterator(motions_directory(), error))
-    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
-// A name of a bundled motion or the path of a motion file.
-fs::path resolve_motion(const std::string& motion) {
-  const fs::path as_path(motion);
-  if (as_path.extension() == ".json") {
-    if (!fs::exists(as_path)) throw UserError("the motion file " + motion + " does not exist");
-    return as_path;
-  }
-  const fs::path bundled = motions_directory() / (motion + ".json");
-  if (fs::exists(bundled)) return bundled;
-  std::string known;
-  for (const auto& name : motion_names()) known += (known.empty() ? "" : ", ") + name;
-  throw UserError("unknown motion '" + motion +
-                  "' (known: " + (known.empty() ? "none found in " + motions_directory().string() : known) +
-                  "; or give a .json file)");
-}
-
-// "a,b" -> two numbers, or a UserError naming the option.
-std::pair<double, double> number_pair(const std::string& text, const std::string& option,
-                                      const std::string& form) {
-  std::istringstream in(text);
-  double a = 0, b = 0;
-  char comma = 0;
-  if (!(in >> a >> comma >> b) || comma != ',' || !(in >> std::ws).eof() || !std::isfinite(a) ||
-      !std::isfinite(b))
-    throw UserError(option + " expects " + form + ", not '" + text + "'");
-  return {a, b};
-}
 
 std::string with_suffix(const fs::path& c3d, const std::string& suffix) {
   fs::path stem = c3d;
@@ -104,22 +59,6 @@ void write_clean_csv(const std::string& path, const s2kf::sim::Recording& record
       out << "\n";
     }
   });
-}
-
-void write_truth_csv(const std::string& path, const s2kf::sim::Recording& recording,
-                     const std::vector<std::string>& joint_names) {
-  s2kf::io::MotionTable table;
-  table.joint_names = joint_names;
-  table.values.resize(recording.frames(), static_cast<Eigen::Index>(6 + joint_names.size()));
-  for (Eigen::Index k = 0; k < recording.frames(); ++k) {
-    const auto& pose = recording.truth[static_cast<std::size_t>(k)];
-    table.frame.push_back(static_cast<long>(k));
-    table.time.push_back(recording.time_s(k));
-    table.values.row(k).head<3>() = pose.root_position.transpose();
-    table.values.row(k).segment<3>(3) = pose.root_rpy.transpose();
-    table.values.row(k).tail(static_cast<Eigen::Index>(joint_names.size())) = pose.joints.transpose();
-  }
-  s2kf::io::save_motion_csv(path, table);
 }
 
 struct Settings {
@@ -164,13 +103,7 @@ void run(const Settings& settings) {
   s2kf::sim::RecordingOptions options;
   options.frame_rate = settings.rate;
   options.frames = settings.frames;
-  if (!settings.occlusion.empty()) {
-    const auto [p, lambda] = number_pair(settings.occlusion, "--occlusion", "p,lambda (e.g. 0.005,100)");
-    if (!(p >= 0.0 && p <= 1.0)) throw UserError("--occlusion: the probability p must lie in [0, 1]");
-    if (!(lambda >= 0.0 && lambda <= s2kf::sim::kMaxPoissonMean))
-      throw UserError("--occlusion: the mean length lambda must lie in [0, 100000] frames");
-    options.occlusion = {p, lambda};
-  }
+  if (!settings.occlusion.empty()) options.occlusion = s2kf::cli::occlusion_option(settings.occlusion);
   for (const auto& text : settings.blackouts) {
     const auto [start, duration] = number_pair(text, "--blackout", "START_S,DURATION_S (e.g. 2,1)");
     if (!(start >= 0.0 && duration >= 0.0))
@@ -217,7 +150,7 @@ void run(const Settings& settings) {
   const std::string clean_path = with_suffix(out, "_clean.csv");
   try {
     write_c3d_recording(out, recording);
-    write_truth_csv(truth_path, recording, subject.joint_names);
+    s2kf::io::save_motion_csv(truth_path, s2kf::sim::truth_motion(recording, subject.joint_names));
     write_clean_csv(clean_path, recording);
   } catch (const std::runtime_error& e) {
     throw UserError(e.what());

@@ -49,6 +49,7 @@ struct TrackSettings {
   double height_mm = 0;  // 0: estimate
   int samples = 0;       // 0: the preset's
   std::string preset = "default";
+  std::string motion_model;  // empty: the preset's
   std::string method = "s2kf";
   std::string markerset;  // empty: the bundled set that matches best
   std::string subject;    // a calibrated subject file (s2kf calibrate)
@@ -176,12 +177,16 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       throw UserError("--truth: " + settings.truth + " has " + std::to_string(truth->frames()) +
                       " rows, but " + input + " has " + std::to_string(info.frame_count) + " frames");
   }
-  if (settings.smooth && static_cast<double>(info.frame_count) * track::TrackingSmoother::kBytesPerFrame >
-                             kSmoothingMemoryLimitBytes)
-    throw UserError(
-        input + ": " + std::to_string(info.frame_count) + " frames are too many to smooth in memory (" +
-        format(static_cast<double>(info.frame_count) * track::TrackingSmoother::kBytesPerFrame / 1e9, 1) +
-        " GB); track without --smooth, or split the recording");
+  const bool with_rates =
+      settings.motion_model.empty()
+          ? track::TrackerOptions{}.motion_model == track::MotionModel::constant_velocity
+          : track::motion_model_from_name(settings.motion_model) == track::MotionModel::constant_velocity;
+  const double smoothing_bytes = static_cast<double>(info.frame_count) *
+                                 static_cast<double>(track::TrackingSmoother::bytes_per_frame(with_rates));
+  if (settings.smooth && smoothing_bytes > kSmoothingMemoryLimitBytes)
+    throw UserError(input + ": " + std::to_string(info.frame_count) +
+                    " frames are too many to smooth in memory (" + format(smoothing_bytes / 1e9, 1) +
+                    " GB); track without --smooth, or split the recording");
   if (settings.figure_frame >= info.frame_count)
     throw UserError(input + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
                     std::to_string(info.frame_count) + " frames (0-based)");
@@ -195,6 +200,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     throw UserError(e.what());
   }
   if (settings.samples > 0) session_options.tracker.samples = settings.samples;
+  if (!settings.motion_model.empty())
+    session_options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
   session_options.height_mm = settings.height_mm;
   session_options.calibrate = settings.calibrate && settings.subject.empty();
   session_options.calibration_frames = settings.calibration_frames;
@@ -574,6 +581,9 @@ const RegisterCommand track_registration{
           ->check(CLI::Range(3, 100001));
       app.add_option("--preset", settings->preset, "noise preset: default or paper")
           ->check(CLI::IsMember({"default", "paper"}));
+      app.add_option("--motion-model", settings->motion_model,
+                     "S2KF system model: random-walk (default) or constant-velocity (docs/tracking.md)")
+          ->check(CLI::IsMember({"random-walk", "constant-velocity"}));
       app.add_option("--method", settings->method, "s2kf, or baseline (per-frame Levenberg-Marquardt)")
           ->check(CLI::IsMember({"s2kf", "baseline"}));
       app.add_option("--markerset", settings->markerset,

@@ -48,6 +48,7 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
   if (session.calibration)
     calibration = {
         {"frames", session.calibration_frames},
+        {"stretches", session.calibration_stretches},
         {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
         {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
         {"segment_scale", session.calibration->segment_scale}};
@@ -97,6 +98,7 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
       {"calibration", calibration},
       {"smoothed", smoothed},
       {"preset", session.tracker.preset},
+      {"motion_model", track::to_string(session.tracker.motion_model)},
       {"frames", run.frames},
       {"frames_tracked", run.frames_tracked},
       {"rate", session.rate_hz},

@@ -23,6 +23,7 @@
 #include <s2kf/core/label_text.hpp>
 #include <s2kf/core/lcd_distance.hpp>
 #include <s2kf/core/lcd_sample_set.hpp>
+#include <s2kf/core/marginal_update.hpp>
 #include <s2kf/core/rts_smoother.hpp>
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/core/sample_set.hpp>
@@ -67,4 +68,5 @@
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
+#include <s2kf/track/true_subject_reference.hpp>
 #include <s2kf/track/truth_metrics.hpp>

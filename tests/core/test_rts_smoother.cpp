@@ -142,3 +142,78 @@ TEST(RtsSmoother, RejectsAProcessNoiseOfTheWrongSize) {
 }
 
 }  // namespace
+
+namespace {
+
+// A constant-velocity model in two dimensions: state [x, y, vx, vy], x_{k+1} = A x_k + w with
+// A = [I dt I; 0 I] and the white-noise-acceleration Q; the positions are measured, the velocities
+// never. The linear RTS smoother must give the marginals of the batch posterior.
+TEST(RtsSmoother, EqualsTheBatchPosteriorOfAConstantVelocityModel) {
+  const int n = 4, steps = 30;
+  const double dt = 0.1, q = 2.0;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Identity(n, n);
+  a(0, 2) = a(1, 3) = dt;
+  Eigen::MatrixXd qm = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k < 2; ++k) {
+    qm(k, k) = q * dt * dt * dt / 3;
+    qm(k, k + 2) = qm(k + 2, k) = q * dt * dt / 2;
+    qm(k + 2, k + 2) = q * dt;
+  }
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, n);
+  h(0, 0) = h(1, 1) = 1;
+  const Eigen::Matrix2d r = Eigen::Vector2d(0.05, 0.2).asDiagonal();
+  const Eigen::VectorXd m0 = (Eigen::VectorXd(n) << 0, 1, 2, -1).finished();
+  const Eigen::MatrixXd p0 = Eigen::VectorXd::Constant(n, 1.5).asDiagonal();
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd x = m0;
+  std::vector<Eigen::VectorXd> y;
+  for (int k = 0; k < steps; ++k) {
+    if (k > 0)
+      x = a * x + qm.llt().matrixL() * Eigen::Vector4d(normal(rng), normal(rng), normal(rng), normal(rng));
+    y.push_back(h * x + Eigen::Vector2d(normal(rng) * std::sqrt(0.05), normal(rng) * std::sqrt(0.2)));
+  }
+  // The Kalman filter, written out.
+  std::vector<GaussianXd> filtered;
+  Eigen::VectorXd m = m0;
+  Eigen::MatrixXd c = p0;
+  for (int k = 0; k < steps; ++k) {
+    if (k > 0) m = a * m, c = a * c * a.transpose() + qm;
+    const Eigen::MatrixXd s = h * c * h.transpose() + r;
+    const Eigen::MatrixXd gain = c * h.transpose() * s.inverse();
+    m += gain * (y[k] - h * m);
+    c -= gain * s * gain.transpose();
+    c = 0.5 * (c + c.transpose()).eval();
+    filtered.emplace_back(m, c);
+  }
+  // The batch posterior in information form.
+  Eigen::MatrixXd info = Eigen::MatrixXd::Zero(n * steps, n * steps);
+  Eigen::VectorXd vec = Eigen::VectorXd::Zero(n * steps);
+  const Eigen::MatrixXd qi = qm.inverse(), ri = r.inverse(), p0i = p0.inverse();
+  info.topLeftCorner(n, n) += p0i;
+  vec.head(n) += p0i * m0;
+  for (int k = 0; k + 1 < steps; ++k) {  // x_{k+1} - A x_k ~ N(0, Q)
+    info.block(n * k, n * k, n, n) += a.transpose() * qi * a;
+    info.block(n * (k + 1), n * (k + 1), n, n) += qi;
+    info.block(n * k, n * (k + 1), n, n) -= a.transpose() * qi;
+    info.block(n * (k + 1), n * k, n, n) -= qi * a;
+  }
+  for (int k = 0; k < steps; ++k) {
+    info.block(n * k, n * k, n, n) += h.transpose() * ri * h;
+    vec.segment(n * k, n) += h.transpose() * ri * y[k];
+  }
+  const Eigen::MatrixXd covariance = info.inverse();
+  const Eigen::VectorXd mean = covariance * vec;
+  const std::vector<GaussianXd> smoothed = rts_smooth_linear(filtered, a, qm);
+  ASSERT_EQ(smoothed.size(), static_cast<std::size_t>(steps));
+  for (int k = 0; k < steps; ++k) {
+    EXPECT_LT((smoothed[k].mean - mean.segment(n * k, n)).cwiseAbs().maxCoeff(), 1e-8) << "step " << k;
+    EXPECT_LT((smoothed[k].covariance - covariance.block(n * k, n * k, n, n)).cwiseAbs().maxCoeff(), 1e-8)
+        << "step " << k;
+  }
+  // The unmeasured velocity is where smoothing helps most.
+  EXPECT_LT(smoothed[5].covariance(2, 2), 0.8 * filtered[5].covariance(2, 2));
+  EXPECT_THROW(rts_smooth_linear(filtered, Eigen::MatrixXd::Identity(3, 3), qm), DimensionError);
+}
+
+}  // namespace

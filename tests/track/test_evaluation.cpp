@@ -14,6 +14,7 @@
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/true_subject_reference.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
 #include "../../examples/s2kf/motion_json.hpp"
@@ -414,6 +415,41 @@ TEST(EvaluateCommand, BadInputGivesASentenceAndExitStatusOne) {
   }
   expect_failure(data_file("handstand.c3d") + " --frames 5 --truth " + (dir / "short.csv").string(),
                  "has 10 frames");
+  // A simulated recording: the motion must exist and excludes a recording and its truth.
+  expect_failure("--motion no_such_motion --frames 5", "unknown motion 'no_such_motion'");
+  expect_failure(data_file("handstand.c3d") + " --motion walk --frames 5", "give no recording");
+  expect_failure("--motion walk --occlusion 2,10 --frames 5", "probability p must lie in [0, 1]");
+  expect_failure(data_file("handstand.c3d") + " --occlusion 0.005,100 --frames 5", "simulated --motion only");
+}
+
+// --motion simulates a realistic subject and reports the true-subject fit beside the S2KF; the
+// numbers are the library's for the same subject and recording.
+TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
+  const fs::path out = fresh_scratch("evaluate_motion");
+  const CommandResult result = run_command(
+      "evaluate --motion walk --subject-seed 2 --frames 80 --runs 1 --samples 93 --no-calibrate --smooth "
+      "--out " +
+      out.string());
+  ASSERT_EQ(result.status, 0) << result.output;
+  EXPECT_NE(result.output.find("(true-subject fit "), std::string::npos) << result.output;
+  const std::string summary = read_text(out / "summary.json");
+  // The library's reference on the same subject and recording.
+  const sim::SubjectOptions options;
+  const sim::Subject subject = sim::make_subject(body::mmm_body_model(options.height_mm), options, 2);
+  const cli::JointTable joints{subject.joint_names, subject.lower, subject.upper};
+  sim::RecordingOptions recording_options;
+  recording_options.frames = 80;
+  const sim::Recording recording = sim::simulate_recording(
+      cli::load_motion_file(data_file("motions/walk.json"), joints, 2), subject, recording_options, 2);
+  const track::TruthComparison expected =
+      track::compare_with_truth(subject.model, track::true_subject_fit(subject, recording),
+                                sim::truth_motion(recording, subject.joint_names), 20);
+  const double reference = json_number(summary, "segment_orientation_rms_deg", "true_subject_reference");
+  EXPECT_NEAR(reference, expected.segment_orientation_rms_deg, 1e-6);
+  EXPECT_GT(reference, 0.1);
+  EXPECT_LT(reference, json_number(summary, "segment_orientation_rms_deg", "s2kf"));  // it knows the subject
+  EXPECT_GT(json_number(summary, "segment_orientation_rms_deg", "s2kf_smoothed"), 0.1);
+  EXPECT_EQ(json_number(summary, "frames"), 80);
 }
 
 }  // namespace

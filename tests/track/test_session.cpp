@@ -29,6 +29,7 @@ TEST(Session, FileAndMemorySourcesGiveTheSameSessionAndRun) {
   ASSERT_EQ(file.labels(), head.labels);
   track::SessionOptions options;
   options.calibration_frames = 150;
+  options.calibration_windows = 1;  // the first 150 frames of the file: the memory source's frames
   const SampleSet& samples = test::tracker_samples();
   const track::Session from_file = track::prepare_session(file, kit_like_set(), options, samples);
   // The height estimate reads spread frames of the whole file; give the memory source the same.
@@ -166,6 +167,47 @@ TEST(StateChart, FoldingKeepsAnglesAndItsInverseRestoresTheState) {
                 .cwiseAbs()
                 .maxCoeff(),
             1e-12);
+}
+
+// With rates (the constant-velocity state), a reflected Theta's rate changes sign with it and the
+// orientation rate turns with the reference; going back with to_previous_chart restores both.
+TEST(StateChart, RatesFollowTheFoldAndTheReferenceTurn) {
+  const int n = 46;
+  Eigen::VectorXd mean = Eigen::VectorXd::LinSpaced(2 * n, -3.0, 4.0);
+  mean.segment<3>(3).setZero();
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+  covariance(6, n + 6) = covariance(n + 6, 6) = 0.3;
+  const Eigen::VectorXd before = mean;
+  const Eigen::MatrixXd covariance_before = covariance;
+  track::fold_joint_parameters(mean, covariance, true);
+  for (Eigen::Index k = 6; k < n; ++k) {
+    const bool reflected = std::abs(std::remainder(before(k), 2 * kPi)) > kPi / 2;
+    EXPECT_EQ(mean(n + k), reflected ? -before(n + k) : before(n + k)) << k;
+  }
+  EXPECT_EQ(mean.segment<3>(n), before.segment<3>(n));           // root rates untouched by the fold
+  EXPECT_EQ(covariance(6, n + 6), covariance_before(6, n + 6));  // state and its rate flip together
+  // The reference turns by D (R_next = R_previous D): in the new chart the rate is D^T omega.
+  const Eigen::Matrix3d turn = body::rotation_exp(Eigen::Vector3d(0.2, -0.1, 0.3));
+  Eigen::VectorXd turned = mean;
+  Eigen::MatrixXd turned_covariance = covariance;
+  track::turn_orientation_rate(turned, turned_covariance, turn);
+  EXPECT_LT((turned.segment<3>(n + 3) - turn.transpose() * mean.segment<3>(n + 3)).norm(), 1e-12);
+  const Eigen::Matrix3d reference = Eigen::Matrix3d::Identity();
+  track::to_previous_chart(reference, reference * turn, before, turned, turned_covariance, true);
+  EXPECT_LT((turned.tail(n) - before.tail(n)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((turned_covariance - covariance_before).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// Calibration reads the whole of a short recording, and spread stretches of a long one.
+TEST(Session, CalibrationStretchesCoverTheRecordingWithinTheBudget) {
+  using Stretches = std::vector<std::pair<std::int64_t, std::int64_t>>;
+  EXPECT_EQ(track::calibration_stretches(800, 1200, 4), (Stretches{{0, 800}}));
+  EXPECT_EQ(track::calibration_stretches(4000, 1200, 4),
+            (Stretches{{0, 300}, {1233, 300}, {2466, 300}, {3700, 300}}));
+  EXPECT_EQ(track::calibration_stretches(4000, 1200, 1), (Stretches{{0, 1200}}));
+  std::int64_t total = 0;
+  for (const auto& [first, count] : track::calibration_stretches(1'000'000, 1200, 4)) total += count;
+  EXPECT_EQ(total, 1200);  // bounded, whatever the length
 }
 
 }  // namespace

@@ -831,3 +831,39 @@ TEST(TrackCommand, MemoryDoesNotGrowWithTheLengthOfTheRecording) {
 }
 
 }  // namespace
+
+namespace {
+
+// The constant-velocity model: a frame without markers is the prediction alone, which must equal
+// the core's predict_linear with the tracker's transition and noise; a frame with markers moves the
+// rates by conditioning (they were zero at the start).
+TEST(Tracker, ConstantVelocityPredictsAsTheLinearModelAndLearnsRates) {
+  body::BodyModel model = body::mmm_body_model(1750);
+  const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
+  track::TrackerOptions options;
+  options.motion_model = track::MotionModel::constant_velocity;
+  track::Tracker tracker(model, mapping, options, 100, test::tracker_samples());
+  ASSERT_EQ(tracker.motion_state_dimension(), 92);
+  body::Pose pose = body::zero_pose(model);
+  const Eigen::Array<bool, Eigen::Dynamic, 1> all =
+      Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(model.marker_count(), true);
+  for (int f = 0; f < 8; ++f) {  // walking forward at 1 m/s
+    pose.root_position.x() = 10.0 * f;
+    tracker.process(body::marker_positions(model, pose), all);
+  }
+  const GaussianXd before = tracker.motion_state();
+  EXPECT_GT(before.mean(46), 300.0);  // the root's x rate, mm/s, learnt from the markers
+  GaussianXd expected = before;
+  SmartSamplingKalmanFilter<> filter(test::tracker_samples());
+  filter.predict_linear(expected, tracker.transition(), tracker.process_noise());
+  tracker.process(body::marker_positions(model, pose),
+                  Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(model.marker_count(), false));
+  const GaussianXd& after = tracker.motion_state();
+  EXPECT_LT((after.mean - expected.mean).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((after.covariance - expected.covariance).cwiseAbs().maxCoeff(),
+            1e-9 * expected.covariance.cwiseAbs().maxCoeff());
+  EXPECT_LT((tracker.state().mean - expected.mean.head(46)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT(after.mean(0) - before.mean(0), 3.0);  // the prediction moved the root on
+}
+
+}  // namespace

@@ -5,6 +5,7 @@
 
 #include <s2kf/body/pose.hpp>
 #include <s2kf/io/marker_sequence.hpp>
+#include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/keyframe_motion.hpp>
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/random.hpp>
@@ -44,6 +45,20 @@ struct Recording : MarkerSequence {
   Eigen::Index markers() const { return point_count(); }
   double hidden_fraction() const { return visible.size() ? 1.0 - visible.cast<double>().mean() : 0.0; }
 };
+
+/// The true poses of a recording as a motion table (one row per frame, the rows `s2kf track`
+/// writes), for comparing an estimate with compare_with_truth or writing FILE_truth.csv.
+inline io::MotionTable truth_motion(const Recording& recording, const std::vector<std::string>& joint_names) {
+  io::MotionTable table;
+  table.joint_names = joint_names;
+  table.values.resize(recording.frames(), static_cast<Eigen::Index>(body::kRootValues + joint_names.size()));
+  for (Eigen::Index k = 0; k < recording.frames(); ++k) {
+    table.frame.push_back(static_cast<long>(k));
+    table.time.push_back(recording.time_s(k));
+    body::write_pose_row(recording.truth[static_cast<std::size_t>(k)], table.values.row(k).transpose());
+  }
+  return table;
+}
 
 /// Stream numbers of the independent random generators (see derive_seed).
 enum class RandomStream : std::uint64_t { noise = 2, occlusion = 3 };  // the subject: SubjectStream

@@ -66,6 +66,14 @@ class GradientBaseline {
   /// Gauss-Newton/Levenberg-Marquardt iterations (linearisations) spent on the last frame.
   int last_iterations() const { return last_iterations_; }
 
+  /// The next frame's fit starts from `pose` (and counts as initialised) instead of the previous
+  /// frame's result: the true-subject reference starts every frame at the true pose.
+  void start_from(const body::Pose& pose) {
+    pose_ = pose;
+    rotation_ = pose.root_rotation();
+    initialised_ = true;
+  }
+
   const FrameEstimate& process(const Eigen::Matrix3Xd& points,
                                const Eigen::Array<bool, Eigen::Dynamic, 1>& visible);
 

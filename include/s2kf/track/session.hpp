@@ -58,8 +58,13 @@ struct SessionOptions {
   /// When no height can be estimated (no two markers on one segment): this height with a warning,
   /// or 0 to refuse the recording.
   double fallback_height_mm = 1750;
-  bool calibrate = true;                   ///< fit the subject's offsets and bone lengths first
-  std::int64_t calibration_frames = 1200;  ///< frames from the start the calibration uses
+  bool calibrate = true;  ///< fit the subject's offsets and bone lengths first
+  /// Frames the calibration uses at most: the whole recording when it is no longer, else
+  /// `calibration_windows` stretches of calibration_frames / calibration_windows frames spread
+  /// evenly from its start to its end, so the subject is fitted on the poses of the whole
+  /// recording while the calibration's cost stays bounded whatever the recording's length.
+  std::int64_t calibration_frames = 1200;
+  int calibration_windows = 4;
   CalibrationOptions calibration = [] {
     CalibrationOptions options;
     options.final_pass = false;  // the run's own first frames give the calibrated distance
@@ -85,8 +90,10 @@ struct Session {
       height_source;  ///< "given", "from the marker-set file", "estimated from N rigid marker pairs", ...
   std::optional<SubjectCalibration> calibration;  ///< when calibrated
   std::int64_t calibration_frames = 0;            ///< frames the calibration used
-  std::vector<std::string> warnings;              ///< the marker set's and the preparation's
-  StageTimes times;                               ///< read, height and calibration: the preparation's
+  /// The stretches of the recording it used: (first frame, frame count).
+  std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches;
+  std::vector<std::string> warnings;  ///< the marker set's and the preparation's
+  StageTimes times;                   ///< read, height and calibration: the preparation's
 
   int markers_used() const { return mapping.markers_used(); }
 };
@@ -113,6 +120,19 @@ inline std::vector<double> calibration_weights(const body::MarkerSet& set, doubl
     weights.push_back(w);
   }
   return weights;
+}
+
+/// The stretches (first frame, count) of a recording of `frames` frames the calibration reads:
+/// all of it when it has at most `budget` frames, else `windows` stretches of budget / windows
+/// frames, the first at the start, the last at the end, the others evenly between.
+inline std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches(std::int64_t frames,
+                                                                                std::int64_t budget,
+                                                                                int windows) {
+  if (frames <= budget || windows <= 1) return {{0, std::min(frames, budget)}};
+  const std::int64_t length = budget / windows;
+  std::vector<std::pair<std::int64_t, std::int64_t>> stretches;
+  for (int w = 0; w < windows; ++w) stretches.emplace_back((frames - length) * w / (windows - 1), length);
+  return stretches;
 }
 
 /// Prepares a session: checks the recording, maps its labels to the set's markers, finds the
@@ -205,10 +225,24 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
   if (options.calibrate) {
     CalibrationOptions calibration = options.calibration;
     calibration.marker_weight = calibration_weights(set, session.tracker.marker_noise_mm);
-    session.calibration_frames = std::min<std::int64_t>(options.calibration_frames, source.frame_count());
+    session.calibration_stretches =
+        calibration_stretches(source.frame_count(), options.calibration_frames, options.calibration_windows);
     try {
       TimedFrameSource timed(source, session.times.read);
-      const MarkerSequence frames = read_frames(timed, 0, session.calibration_frames);
+      MarkerSequence frames;
+      for (const auto& [first, count] : session.calibration_stretches) {
+        const MarkerSequence stretch = read_frames(timed, first, count);
+        if (frames.frame_count() == 0) {
+          frames = stretch;
+          continue;
+        }
+        calibration.restart_frames.push_back(static_cast<long>(frames.frame_count()));
+        frames.positions.conservativeResize(Eigen::NoChange, frames.frame_count() + stretch.frame_count());
+        frames.positions.rightCols(stretch.frame_count()) = stretch.positions;
+        frames.visible.conservativeResize(Eigen::NoChange, frames.positions.cols());
+        frames.visible.rightCols(stretch.frame_count()) = stretch.visible;
+      }
+      session.calibration_frames = frames.frame_count();
       const auto start = std::chrono::steady_clock::now();
       session.calibration =
           calibrate_subject(session.model, session.mapping, session.tracker, frames, samples, calibration);
@@ -219,6 +253,7 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
         throw std::invalid_argument(std::string("calibration failed: ") + e.what());
       session.calibration.reset();
       session.calibration_frames = 0;
+      session.calibration_stretches.clear();
       session.warnings.push_back(std::string("subject not calibrated (calibration failed: ") + e.what() +
                                  "); the marker set is used as it is");
     }
@@ -375,24 +410,26 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
 }
 #endif
 
-/// The calibrated subject's mean marker distance over the calibration window, from the run itself:
-/// the tracker is causal, so the run's first frames are what a final calibration pass would track.
-/// NaN when the session was not calibrated or nothing was measured there.
+/// The calibrated subject's mean marker distance over the calibration's stretches, from the run
+/// itself: the tracker is causal, so the run's first frames are what a final calibration pass
+/// would track (its first skip_frames tracked frames, the convergence, are left out). NaN when the
+/// session was not calibrated or nothing was measured there.
 double calibrated_distance_mm(const Session& session, const TrackingRun& run);
 
 #if S2KF_DEFINE_HEAVY
 S2KF_INLINE double calibrated_distance_mm(const Session& session, const TrackingRun& run) {
   if (!session.calibration) return std::numeric_limits<double>::quiet_NaN();
   const auto& distance = run.mean_marker_distance;
-  const std::size_t end =
-      std::min<std::size_t>(distance.size(), static_cast<std::size_t>(session.calibration_frames));
   std::size_t first = 0;
-  while (first < end && !std::isfinite(distance[first])) ++first;
-  const std::size_t from =
-      std::min<std::size_t>(end, first + static_cast<std::size_t>(CalibrationOptions{}.skip_frames));
-  return mean_from(std::vector<double>(distance.begin() + static_cast<std::ptrdiff_t>(from),
-                                       distance.begin() + static_cast<std::ptrdiff_t>(end)),
-                   0);
+  while (first < distance.size() && !std::isfinite(distance[first])) ++first;
+  const std::size_t from = first + static_cast<std::size_t>(CalibrationOptions{}.skip_frames);
+  double sum = 0;
+  long count = 0;
+  for (const auto& [start, length] : session.calibration_stretches)
+    for (auto f = static_cast<std::size_t>(std::max<std::int64_t>(start, static_cast<std::int64_t>(from)));
+         f < distance.size() && f < static_cast<std::size_t>(start + length); ++f)
+      if (std::isfinite(distance[f])) sum += distance[f], ++count;
+  return count ? sum / static_cast<double>(count) : std::numeric_limits<double>::quiet_NaN();
 }
 #endif
 

@@ -30,18 +30,43 @@ inline void flip_state_sign(Eigen::MatrixXd& covariance, Eigen::Index k) {
   covariance.col(k) *= -1;
 }
 
+/// The constant-velocity state [pose (n), rate of the pose (n)] holds twice the pose's dimension;
+/// a pose-only state holds it once. Returns n.
+inline Eigen::Index pose_dimension_of(const Eigen::VectorXd& mean, bool with_rates) {
+  return with_rates ? mean.size() / 2 : mean.size();
+}
+
 /// Moves every Theta of `mean` onto the principal branch [-pi/2, pi/2], where theta(Theta) is
 /// one-to-one: first into (-pi, pi], then reflected to +-pi - Theta where needed (the same angle;
-/// the sign of that state's covariance row and column flips).
-inline void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) {
-  for (Eigen::Index k = kFirstJointState; k < mean.size(); ++k) {
+/// the sign of that state's covariance row and column flips). With rates (the constant-velocity
+/// state), a reflected Theta's rate changes sign too: d(pi - Theta)/dt = -dTheta/dt.
+inline void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance,
+                                  bool with_rates = false) {
+  const Eigen::Index n = pose_dimension_of(mean, with_rates);
+  for (Eigen::Index k = kFirstJointState; k < n; ++k) {
     const double folded = std::remainder(mean(k), 2 * kPi);  // (-pi, pi]
     mean(k) = folded;
     if (std::abs(folded) > kPi / 2) {
       mean(k) = (folded > 0 ? kPi : -kPi) - folded;
       flip_state_sign(covariance, k);
+      if (with_rates) {
+        mean(n + k) = -mean(n + k);
+        flip_state_sign(covariance, n + k);
+      }
     }
   }
+}
+
+/// Expresses the orientation rate (states n+3..n+5 of a state with rates) in a chart whose
+/// reference is turned by `turn` (new reference = old reference * turn): a rate about the old
+/// reference's axes is turn^T times it about the new ones; its covariance rows and columns follow.
+inline void turn_orientation_rate(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance,
+                                  const Eigen::Matrix3d& turn) {
+  const Eigen::Index r = mean.size() / 2 + 3;
+  const Eigen::Matrix3d t = turn.transpose();
+  mean.segment<3>(r) = (t * mean.segment<3>(r)).eval();
+  covariance.middleRows<3>(r) = (t * covariance.middleRows<3>(r)).eval();
+  covariance.middleCols<3>(r) = (covariance.middleCols<3>(r) * turn).eval();
 }
 
 /// Rewrites a Gaussian of the chart after a re-centring (reference `next`, Theta folded) in the
@@ -52,12 +77,17 @@ inline void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covari
 /// exact for the mean. D is one frame's update, close to the identity, so the covariance is kept as
 /// it is (its change is of the order of the angle of D times the error). Joints: of Theta's
 /// representatives (Theta + 2k pi, pi - Theta + 2k pi) the one nearest the previous value.
+///
+/// With rates (the constant-velocity state), the orientation rate turns with the chart (exactly,
+/// by D) and a reflected Theta's rate changes sign.
 inline void to_previous_chart(const Eigen::Matrix3d& previous, const Eigen::Matrix3d& next,
                               const Eigen::VectorXd& previous_mean, Eigen::VectorXd& mean,
-                              Eigen::MatrixXd& covariance) {
+                              Eigen::MatrixXd& covariance, bool with_rates = false) {
   const Eigen::Matrix3d d = previous.transpose() * next;
   mean.segment<3>(3) = body::rotation_log(d * body::rotation_exp(mean.segment<3>(3)));
-  for (Eigen::Index k = kFirstJointState; k < mean.size(); ++k) {
+  const Eigen::Index n = pose_dimension_of(mean, with_rates);
+  if (with_rates) turn_orientation_rate(mean, covariance, d.transpose());
+  for (Eigen::Index k = kFirstJointState; k < n; ++k) {
     const double reference = previous_mean(k);
     const auto nearest = [&](double value) {
       return value + 2 * kPi * std::round((reference - value) / (2 * kPi));
@@ -66,6 +96,10 @@ inline void to_previous_chart(const Eigen::Matrix3d& previous, const Eigen::Matr
     if (std::abs(reflected - reference) < std::abs(direct - reference)) {
       mean(k) = reflected;
       flip_state_sign(covariance, k);
+      if (with_rates) {
+        mean(n + k) = -mean(n + k);
+        flip_state_sign(covariance, n + k);
+      }
     } else {
       mean(k) = direct;
     }

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -61,6 +62,10 @@ struct CalibrationOptions {
   /// scaled to 1 for the tracker's noise); empty: all 1.
   std::vector<double> marker_weight;
   bool final_pass = true;  ///< track once more with the calibrated model to report its distance
+  /// Frames of the calibration recording where a new stretch begins (stretches cut from different
+  /// parts of a longer recording and put one after another): the tracker starts afresh there, and
+  /// skip_frames counts from there.
+  std::vector<long> restart_frames;
 
   void validate() const {
     if (iterations < 1) throw std::invalid_argument("calibration: at least 1 iteration is needed");
@@ -128,18 +133,35 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const M
                                            const TrackerOptions& tracker_options,
                                            const MarkerSequence& recording, const SampleSet& samples,
                                            const CalibrationOptions& options, double& mean_distance) {
-  Tracker tracker(model, mapping, tracker_options, recording.rate_hz, samples);
+  std::optional<Tracker> tracker;
   MarkerFrame input;
   std::vector<double> distance;
   std::vector<BundleFrame> frames;
   long started = -1;
+  double distance_sum = 0;
+  long distance_count = 0;
+  // The pass's distance: the mean over the frames after the convergence allowance (a late spike
+  // must not empty the window, as it can with converged_frame), stretch by stretch.
+  const auto add_stretch = [&] {
+    for (std::size_t k = static_cast<std::size_t>(started < 0 ? 0 : started + options.skip_frames);
+         started >= 0 && k < distance.size(); ++k)
+      if (std::isfinite(distance[k])) distance_sum += distance[k], ++distance_count;
+  };
   for (Eigen::Index f = 0; f < recording.frame_count(); ++f) {
+    const bool restart = std::find(options.restart_frames.begin(), options.restart_frames.end(),
+                                   static_cast<long>(f)) != options.restart_frames.end();
+    if (f == 0 || restart) {
+      add_stretch();
+      distance.clear();
+      started = -1;
+      tracker.emplace(model, mapping, tracker_options, recording.rate_hz, samples);
+    }
     recording.read_frame(f, input);
-    const FrameEstimate& estimate = tracker.process(input.positions, input.visible);
+    const FrameEstimate& estimate = tracker->process(input.positions, input.visible);
     distance.push_back(estimate.mean_marker_distance);
     if (!estimate.tracked) continue;
-    if (started < 0) started = static_cast<long>(f);
-    const long since = static_cast<long>(f) - started;
+    if (started < 0) started = static_cast<long>(distance.size()) - 1;
+    const long since = static_cast<long>(distance.size()) - 1 - started;
     if (since >= options.skip_frames && since % options.stride == 0 && estimate.status == FilterStatus::ok) {
       BundleFrame frame;
       frame.index = static_cast<long>(f);
@@ -149,9 +171,9 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const M
       frames.push_back(std::move(frame));
     }
   }
-  // Mean over the frames after the convergence allowance (a late spike must not empty the window,
-  // as it can with converged_frame).
-  mean_distance = mean_from(distance, started < 0 ? 0 : started + options.skip_frames);
+  add_stretch();
+  mean_distance = distance_count ? distance_sum / static_cast<double>(distance_count)
+                                 : std::numeric_limits<double>::quiet_NaN();
   return frames;
 }
 

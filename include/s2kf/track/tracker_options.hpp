@@ -13,8 +13,37 @@ namespace s2kf::track {
 /// Noise levels are given per second of motion and converted per frame with the recording's rate,
 /// so the same options track at 100 Hz and at 240 Hz: a random walk whose per-frame standard
 /// deviation is speed / rate follows a motion of about that speed.
+/// How the state moves between frames. random_walk: x_{k+1} = x_k + w (the paper's). constant_velocity:
+/// the state also holds the pose's rate of change v, x_{k+1} = x_k + dt v_k, v_{k+1} = v_k, both
+/// disturbed by white-noise acceleration (and x by the random walk's noise as well).
+enum class MotionModel { random_walk, constant_velocity };
+
+inline MotionModel motion_model_from_name(const std::string& name) {
+  if (name == "random-walk") return MotionModel::random_walk;
+  if (name == "constant-velocity") return MotionModel::constant_velocity;
+  throw std::invalid_argument("unknown motion model '" + name + "' (use random-walk or constant-velocity)");
+}
+
+inline std::string to_string(MotionModel model) {
+  return model == MotionModel::random_walk ? "random-walk" : "constant-velocity";
+}
+
 struct TrackerOptions {
   int samples = 301;  ///< S2KF sample count L (odd: symmetric set plus the origin)
+
+  MotionModel motion_model = MotionModel::random_walk;
+  /// Constant velocity: spectral density sqrt(q) of the white-noise acceleration of the root
+  /// position (mm s^-1.5), orientation (rad s^-1.5) and Theta (s^-1.5); over one frame of dt the
+  /// velocity's SD grows by sqrt(q dt), and Q = q [dt^3/3, dt^2/2; dt^2/2, dt] per component.
+  /// The defaults are the best of the levels tried on the simulated motions (docs/tracking.md);
+  /// larger ones (300 mm, 3, 3 and above) let the rates chase soft tissue and diverge.
+  double position_acceleration = 100.0;
+  double orientation_acceleration = 1.0;
+  double joint_acceleration = 1.0;
+  /// Constant velocity: SD of the velocity when tracking starts (the pose's units per second).
+  double initial_position_rate_sd = 1000.0;
+  double initial_orientation_rate_sd = 3.0;
+  double initial_joint_rate_sd = 4.0;
 
   double marker_noise_mm =
       10.0;  ///< per-coordinate SD of a marker against the model (placement, soft tissue, noise)
@@ -69,8 +98,11 @@ struct TrackerOptions {
     for (double sd : marker_noise_mm_per_marker)
       if (!std::isnan(sd) && !(sd > 0 && std::isfinite(sd)))
         throw std::invalid_argument("every per-marker noise must be a positive number of mm");
-    if (!(position_speed_mm_per_s >= 0 && orientation_speed_rad_per_s >= 0 && joint_speed_per_s >= 0))
+    if (!(position_speed_mm_per_s >= 0 && orientation_speed_rad_per_s >= 0 && joint_speed_per_s >= 0 &&
+          position_acceleration >= 0 && orientation_acceleration >= 0 && joint_acceleration >= 0))
       throw std::invalid_argument("process noise levels must not be negative");
+    if (!(initial_position_rate_sd > 0 && initial_orientation_rate_sd > 0 && initial_joint_rate_sd > 0))
+      throw std::invalid_argument("initial standard deviations must be positive");
     if (min_markers_to_start < 3) throw std::invalid_argument("at least 3 markers are needed to start");
     if (initial_iterations < 1 || converging_iterations < 1 || converging_frames < 0)
       throw std::invalid_argument("iteration counts must be at least 1");

@@ -1,6 +1,7 @@
 /// @file
 /// Offline smoothing of a tracked recording (`s2kf track --smooth`): the tracker's posterior is kept
-/// after every frame, then a Rauch-Tung-Striebel pass runs backwards over them. The smoother works
+/// after every frame (with the rates, for the constant-velocity model), then a Rauch-Tung-Striebel
+/// pass runs backwards over them. The smoother works
 /// on the bounded joint parameters Theta, like the filter, so every joint stays within its limits.
 #pragma once
 
@@ -22,10 +23,17 @@ namespace s2kf::track {
 class TrackingSmoother {
  public:
   explicit TrackingSmoother(const Tracker& tracker)
-      : joints_(tracker.model()), process_noise_(tracker.process_noise()) {}
+      : joints_(tracker.model()),
+        transition_(tracker.transition()),
+        process_noise_(tracker.process_noise()),
+        with_rates_(tracker.with_rates()) {}
 
-  /// Memory one recorded frame takes (mean, covariance and reference rotation of the 46-state).
+  /// Memory one recorded frame takes (mean, covariance and reference rotation of the 46-state);
+  /// the constant-velocity model keeps the 92-state, bytes_per_frame(true), four times as much.
   static constexpr std::size_t kBytesPerFrame = (46 + 46 * 46 + 9) * sizeof(double);
+  static constexpr std::size_t bytes_per_frame(bool with_rates) {
+    return with_rates ? (92 + 92 * 92 + 9) * sizeof(double) : kBytesPerFrame;
+  }
 
   /// Keeps the tracker's posterior after the frame that is row `row` of the motion table. Call it
   /// after every tracker.process(); frames before tracking starts are skipped.
@@ -33,10 +41,10 @@ class TrackingSmoother {
     if (!tracker.estimate().tracked) return;
     if (!rows_.empty() && row != rows_.back() + 1)
       throw std::invalid_argument("TrackingSmoother::record: tracked frames must come one after another");
-    if (tracker.state().dimension() != process_noise_.rows())
+    if (tracker.motion_state().dimension() != process_noise_.rows())
       throw std::invalid_argument(
           "TrackingSmoother::record: the tracker is not the one the smoother was made for");
-    states_.push_back(tracker.state());
+    states_.push_back(tracker.motion_state());
     references_.push_back(tracker.reference_rotation());
     rows_.push_back(row);
   }
@@ -50,11 +58,12 @@ class TrackingSmoother {
  private:
   /// Step k+1's chart differs from step k's by the tracker's re-centring (state_chart.hpp).
   void to_chart_of(std::size_t k, Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) const {
-    to_previous_chart(references_[k], references_[k + 1], states_[k].mean, mean, covariance);
+    to_previous_chart(references_[k], references_[k + 1], states_[k].mean, mean, covariance, with_rates_);
   }
 
   body::BoundedJoints joints_;
-  Eigen::MatrixXd process_noise_;
+  Eigen::MatrixXd transition_, process_noise_;
+  bool with_rates_ = false;
   std::vector<GaussianXd> states_;
   std::vector<Eigen::Matrix3d> references_;
   std::vector<Eigen::Index> rows_;
@@ -62,10 +71,11 @@ class TrackingSmoother {
 
 #if S2KF_DEFINE_HEAVY
 S2KF_INLINE void TrackingSmoother::smooth(io::MotionTable& motion) const {
-  const std::vector<GaussianXd> smoothed = rts_smooth_random_walk(
-      states_, process_noise_, [this](std::size_t k, Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) {
-        to_chart_of(k, mean, covariance);
-      });
+  const std::vector<GaussianXd> smoothed =
+      rts_smooth_linear(states_, transition_, process_noise_,
+                        [this](std::size_t k, Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) {
+                          to_chart_of(k, mean, covariance);
+                        });
   const Eigen::Index joints = joints_.size();
   for (std::size_t k = 0; k < smoothed.size(); ++k) {
     const Eigen::VectorXd& m = smoothed[k].mean;
@@ -76,7 +86,7 @@ S2KF_INLINE void TrackingSmoother::smooth(io::MotionTable& motion) const {
     motion.values.row(row).head<3>() = m.head<3>().transpose();
     motion.values.row(row).segment<3>(3) =
         body::rpy_from_rotation(chart_rotation(references_[k], m.segment<3>(3))).transpose();
-    motion.values.row(row).tail(joints) = joints_.angles(m.tail(joints)).transpose();
+    motion.values.row(row).tail(joints) = joints_.angles(m.segment(kFirstJointState, joints)).transpose();
   }
 }
 #endif  // S2KF_DEFINE_HEAVY

@@ -1,0 +1,87 @@
+// The tuning driver behind the motion-model and calibration-prior choices in docs/tracking.md: one
+// simulated realistic subject and motion, tracked as `s2kf track` tracks it (marker set chosen from
+// the labels, calibration unless 0), with the tracker's motion model and noise levels given on the
+// command line; prints the accuracy against the truth after 20 frames (and the true-subject
+// reference when asked). Not built by CMake; build it from the repository root with
+//   g++ -O2 -DNDEBUG -std=c++17 -Iinclude -Iexamples/s2kf -isystem /usr/include/eigen3 \
+//     -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp examples/s2kf/tracker_samples.cpp -o
+//     accuracy-tune
+// Usage: accuracy-tune MOTION SEED OCCLUSION(0|1) SMOOTH(0|1) CALIBRATE(0|1) rw|cv
+//          [POSITION_ACC ORIENTATION_ACC JOINT_ACC POSITION_SPEED ORIENTATION_SPEED JOINT_SPEED
+//           REFERENCE(0|1) [INITIAL_RATE_SDS x3]]
+// Environment: OFFSET_SD, SCALE_SD (calibration priors), NOSCALE (offsets only), SEGMENTS (per segment).
+#include <cstdio>
+#include <cstdlib>
+#include <s2kf/body/marker_set.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/sim/recording.hpp>
+#include <s2kf/track/session.hpp>
+#include <s2kf/track/true_subject_reference.hpp>
+#include <s2kf/track/truth_metrics.hpp>
+#include <string>
+#include "marker_set_json.hpp"
+#include "motion_json.hpp"
+#include "tracker_samples.hpp"
+using namespace s2kf;
+int main(int argc, char** argv) {
+  // usage: tune motion seed occlusion(0/1) smooth(0/1) calibrate(0/1) model(rw/cv) pa oa ja ps os js ref(0/1)
+  std::string motion_name = argv[1];
+  const unsigned seed = std::atoi(argv[2]);
+  const bool occl = std::atoi(argv[3]), smooth = std::atoi(argv[4]), calib = std::atoi(argv[5]);
+  sim::SubjectOptions so;
+  const sim::Subject subject = sim::make_subject(body::mmm_body_model(so.height_mm), so, seed);
+  cli::JointTable joints{subject.joint_names, subject.lower, subject.upper};
+  const auto motion =
+      cli::load_motion_file(std::string(S2KF_DATA_DIR) + "/motions/" + motion_name + ".json", joints, seed);
+  sim::RecordingOptions ro;
+  if (occl) ro.occlusion = {sim::kPaperOcclusionProbability, sim::kPaperOcclusionMeanFrames};
+  const sim::Recording rec = sim::simulate_recording(motion, subject, ro, seed);
+  track::SessionOptions opt;
+  opt.calibrate = calib;
+  if (const char* v = std::getenv("OFFSET_SD")) opt.calibration.offset_prior_sd_mm = std::atof(v);
+  if (const char* v = std::getenv("SCALE_SD")) opt.calibration.scale_prior_sd_per_frame = std::atof(v);
+  if (const char* v = std::getenv("NOSCALE")) opt.calibration.estimate_segment_scales = false;
+  std::string model = argv[6];
+  opt.tracker.motion_model =
+      model == "cv" ? track::MotionModel::constant_velocity : track::MotionModel::random_walk;
+  if (argc > 7) {
+    opt.tracker.position_acceleration = std::atof(argv[7]);
+    opt.tracker.orientation_acceleration = std::atof(argv[8]);
+    opt.tracker.joint_acceleration = std::atof(argv[9]);
+    opt.tracker.position_speed_mm_per_s = std::atof(argv[10]);
+    opt.tracker.orientation_speed_rad_per_s = std::atof(argv[11]);
+    opt.tracker.joint_speed_per_s = std::atof(argv[12]);
+  }
+  const bool ref = argc > 13 && std::atoi(argv[13]);
+  if (argc > 16) {
+    opt.tracker.initial_position_rate_sd = std::atof(argv[14]);
+    opt.tracker.initial_orientation_rate_sd = std::atof(argv[15]);
+    opt.tracker.initial_joint_rate_sd = std::atof(argv[16]);
+  }
+  SequenceFrameSource source(rec);
+  const body::MarkerSet set = cli::choose_marker_set_for(rec.labels, "", "").set;
+  const SampleSet samples = cli::cached_sample_set(46, opt.tracker.samples);
+  const track::Session session = track::prepare_session(source, set, opt, samples);
+  track::RunOptions run_options;
+  run_options.smooth = smooth;
+  SequenceFrameSource source2(rec);
+  const track::TrackingRun run = track::run_session(session, source2, samples, run_options);
+  const io::MotionTable truth = sim::truth_motion(rec, session.model.joint_names());
+  const auto t = track::compare_with_truth(session.model, run.motion, truth, 20);
+  std::vector<double> s = run.seconds;
+  std::sort(s.begin(), s.end());
+  std::printf("%s seed %u occl %d smooth %d: seg %.2f flex %.2f root %.2f viol %ld dist %.2f med %.2f ms",
+              motion_name.c_str(), seed, occl, smooth, t.segment_orientation_rms_deg, t.limb_flexion_rms_deg,
+              t.root_orientation_rms_deg, t.joint_limit_violations,
+              track::mean_from(run.mean_marker_distance, 20), 1000 * s[s.size() / 2]);
+  if (ref) {
+    const auto r = track::compare_with_truth(session.model, track::true_subject_fit(subject, rec), truth, 20);
+    std::printf(" | ref seg %.2f flex %.2f root %.2f", r.segment_orientation_rms_deg, r.limb_flexion_rms_deg,
+                r.root_orientation_rms_deg);
+  }
+  std::printf("\n");
+  if (std::getenv("SEGMENTS")) {
+    for (const auto& [name, rms] : t.segment_rms_deg) std::printf(" %s %.1f", name.c_str(), rms);
+    std::printf("\n");
+  }
+}
