@@ -103,7 +103,8 @@ TEST(Batch, OutputsMirrorTheSubfoldersAtOneJobAndAtTwo) {
     ASSERT_EQ(result.status, 0) << result.output;
     EXPECT_EQ(files_below(out),
               (std::set<std::string>{"S01/Walk01.csv", "S01/Walk01.json", "S01/Walk01_markers.csv",
-                                     "S02/Walk01.csv", "S02/Walk01.json", "S02/Walk01_markers.csv"}));
+                                     "S01/Walk01_segments.csv", "S02/Walk01.csv", "S02/Walk01.json",
+                                     "S02/Walk01_markers.csv", "S02/Walk01_segments.csv"}));
     EXPECT_EQ(lines_of(read_text_file(out + "/S01/Walk01.csv")).size(), kWalkFrames + 1);
     EXPECT_EQ(lines_of(read_text_file(out + "/S02/Walk01.csv")).size(), kHandstandFrames + 1);
     EXPECT_EQ(read_json(out + "/S01/Walk01.json")["input"], dir + "/in/S01/Walk01.c3d");
@@ -127,10 +128,10 @@ TEST(Batch, OneBadFileFailsAloneNamedAndRecordedAndLeavesNoPartialOutput) {
   ASSERT_EQ(lines.size(), 2u) << result.output;  // --quiet: the failure and the closing sentence
   EXPECT_EQ(lines[0].rfind("s2kf: " + bad + ": not a C3D file", 0), 0u) << result.output;
   EXPECT_EQ(lines[1].rfind("s2kf: 1 of 3 recordings could not be tracked: " + bad, 0), 0u) << result.output;
-  EXPECT_EQ(
-      files_below(out),
-      (std::set<std::string>{"S01/Walk01.csv", "S01/Walk01.json", "S01/Walk01_markers.csv", "S02/Walk01.csv",
-                             "S02/Walk01.json", "S02/Walk01_markers.csv", "S02/broken.json"}));
+  EXPECT_EQ(files_below(out),
+            (std::set<std::string>{"S01/Walk01.csv", "S01/Walk01.json", "S01/Walk01_markers.csv",
+                                   "S01/Walk01_segments.csv", "S02/Walk01.csv", "S02/Walk01.json",
+                                   "S02/Walk01_markers.csv", "S02/Walk01_segments.csv", "S02/broken.json"}));
   const json record = read_json(out + "/S02/broken.json");
   EXPECT_EQ(record["input"], bad);
   EXPECT_EQ(record["status"], "failed");
@@ -320,13 +321,14 @@ TEST(Batch, OutEndingInASlashOrNamingAFolderIsAFolderForOneRecordingToo) {
   auto result =
       run_command("track " + data("walk.c3d") + " --formats csv" + kFast + " --out " + dir + "/new/");
   ASSERT_EQ(result.status, 0) << result.output;
-  EXPECT_EQ(files_below(dir + "/new"), (std::set<std::string>{"walk.csv", "walk.json", "walk_markers.csv"}));
+  EXPECT_EQ(files_below(dir + "/new"),
+            (std::set<std::string>{"walk.csv", "walk.json", "walk_markers.csv", "walk_segments.csv"}));
   fs::create_directories(dir + "/existing");
   result =
       run_command("track " + data("walk.c3d") + " --formats csv" + kFast + " --out " + dir + "/existing");
   ASSERT_EQ(result.status, 0) << result.output;
   EXPECT_EQ(files_below(dir + "/existing"),
-            (std::set<std::string>{"walk.csv", "walk.json", "walk_markers.csv"}));
+            (std::set<std::string>{"walk.csv", "walk.json", "walk_markers.csv", "walk_segments.csv"}));
 }
 
 TEST(Batch, AFileWhereAnOutputFolderMustGoIsRefusedBeforeAnythingRuns) {

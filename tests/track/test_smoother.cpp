@@ -77,8 +77,9 @@ TEST(TrackingSmoother, LowersTheErrorAgainstTruthOnTheBundledWalk) {
   const Smoothed s = track_and_smooth("walk");
   print("filtered", s.filtered);
   print("smoothed", s.smoothed);
-  EXPECT_LT(s.smoothed.limb_flexion_rms_deg,
-            0.93 * s.filtered.limb_flexion_rms_deg);  // measured 3.13 -> 2.75
+  // Measured 2.67 -> 2.56 deg (3.13 -> 2.75 before the even split of the spine's unseen twists
+  // lowered the filter's own error).
+  EXPECT_LT(s.smoothed.limb_flexion_rms_deg, 0.98 * s.filtered.limb_flexion_rms_deg);
   EXPECT_LT(s.smoothed.segment_orientation_rms_deg, s.filtered.segment_orientation_rms_deg);
   EXPECT_LT(s.smoothed.root_position_rms_mm, s.filtered.root_position_rms_mm);
   EXPECT_EQ(s.smoothed.joint_limit_violations, 0);

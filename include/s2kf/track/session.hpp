@@ -124,10 +124,14 @@ inline std::vector<double> calibration_weights(const body::MarkerSet& set, doubl
 
 /// The stretches (first frame, count) of a recording of `frames` frames the calibration reads:
 /// all of it when it has at most `budget` frames, else `windows` stretches of budget / windows
-/// frames, the first at the start, the last at the end, the others evenly between.
+/// frames, the first at the start, the last at the end, the others evenly between. A stretch is
+/// never shorter than kMinimumStretchFrames (the tracker converges at the start of each): a small
+/// budget gives fewer stretches, down to one at the start.
+inline constexpr std::int64_t kMinimumStretchFrames = 100;
 inline std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches(std::int64_t frames,
                                                                                 std::int64_t budget,
                                                                                 int windows) {
+  windows = static_cast<int>(std::min<std::int64_t>(windows, budget / kMinimumStretchFrames));
   if (frames <= budget || windows <= 1) return {{0, std::min(frames, budget)}};
   const std::int64_t length = budget / windows;
   std::vector<std::pair<std::int64_t, std::int64_t>> stretches;

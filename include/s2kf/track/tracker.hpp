@@ -33,44 +33,40 @@ namespace s2kf::track {
 /// Why a marker the recording shows was left out of a frame's update.
 enum class MarkerRejection : std::uint8_t {
   none,
-  innovation, ///< improbable under its predicted covariance (a swapped,
-              ///< mislabelled or jumping marker)
-  frozen,     ///< its coordinates repeat exactly while the body moves (a stuck
-              ///< marker)
+  innovation,  ///< improbable under its predicted covariance (a swapped,
+               ///< mislabelled or jumping marker)
+  frozen,      ///< its coordinates repeat exactly while the body moves (a stuck
+               ///< marker)
 };
 
-inline const char *to_string(MarkerRejection rejection) {
+inline const char* to_string(MarkerRejection rejection) {
   switch (rejection) {
-  case MarkerRejection::innovation:
-    return "innovation";
-  case MarkerRejection::frozen:
-    return "frozen";
-  default:
-    return "none";
+    case MarkerRejection::innovation:
+      return "innovation";
+    case MarkerRejection::frozen:
+      return "frozen";
+    default:
+      return "none";
   }
 }
 
 /// What the tracker knows after one frame.
 struct FrameEstimate {
-  bool tracked = false; ///< false before the first frame with enough markers
+  bool tracked = false;  ///< false before the first frame with enough markers
   FilterStatus status = FilterStatus::nothing_observed;
-  body::Pose
-      pose; ///< root position (mm), roll/pitch/yaw (rad), joint angles (rad)
+  body::Pose pose;  ///< root position (mm), roll/pitch/yaw (rad), joint angles (rad)
   Eigen::Matrix3d root_rotation = Eigen::Matrix3d::Identity();
-  Eigen::MatrixXd
-      covariance; ///< 46 x 46: position, orientation error (rad), Theta
-  Eigen::Matrix3Xd
-      predicted_markers; ///< every model marker at the estimated pose (mm)
-  Eigen::VectorXd
-      marker_distance; ///< per model marker, mm; NaN where not observed
+  Eigen::MatrixXd covariance;          ///< 46 x 46: position, orientation error (rad), Theta
+  Eigen::Matrix3Xd predicted_markers;  ///< every model marker at the estimated pose (mm)
+  Eigen::VectorXd marker_distance;     ///< per model marker, mm; NaN where not observed
   double mean_marker_distance = std::numeric_limits<double>::quiet_NaN();
-  int visible_markers = 0; ///< mapped markers observed this frame
+  int visible_markers = 0;  ///< mapped markers observed this frame
   /// Per model marker: none, or why the marker was seen but left out of this
   /// frame's update.
   std::vector<MarkerRejection> rejection;
-  int rejected_markers = 0; ///< markers left out this frame (rejection != none)
+  int rejected_markers = 0;  ///< markers left out this frame (rejection != none)
   double nis = std::numeric_limits<double>::quiet_NaN();
-  double seconds = 0; ///< time spent in process()
+  double seconds = 0;  ///< time spent in process()
 };
 
 /// Tracks one subject. State x = [root position (3), orientation error (3),
@@ -80,7 +76,7 @@ struct FrameEstimate {
 /// can turn through any rotation. Joint angles are theta = bounded(Theta),
 /// inside their limits for every Theta.
 class Tracker {
-public:
+ public:
   static constexpr int kRootDofs = kFirstJointState;
 
   /// `samples` is the S2KF's sample set for state_dimension() (6 + joints)
@@ -88,52 +84,43 @@ public:
   /// (sample_cache.hpp): where sample sets come from is the caller's business,
   /// so the tracker does no file I/O. Options are checked first:
   /// std::invalid_argument (one sentence) before any work.
-  Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options,
-          double rate_hz, const SampleSet &samples);
+  Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options, double rate_hz,
+          const SampleSet& samples);
 
   int joint_count() const { return model_.joint_count(); }
   int state_dimension() const { return kRootDofs + model_.joint_count(); }
   /// The whole state the motion model moves: the pose (state_dimension()), and
   /// with the constant-velocity model its rate of change as well (twice as
   /// many).
-  int motion_state_dimension() const {
-    return with_rates() ? 2 * state_dimension() : state_dimension();
-  }
-  bool with_rates() const {
-    return options_.motion_model == MotionModel::constant_velocity;
-  }
-  const body::BodyModel &model() const { return model_; }
-  const MarkerMapping &mapping() const { return mapping_; }
-  const TrackerOptions &options() const { return options_; }
+  int motion_state_dimension() const { return with_rates() ? 2 * state_dimension() : state_dimension(); }
+  bool with_rates() const { return options_.motion_model == MotionModel::constant_velocity; }
+  const body::BodyModel& model() const { return model_; }
+  const MarkerMapping& mapping() const { return mapping_; }
+  const TrackerOptions& options() const { return options_; }
   bool initialised() const { return initialised_; }
-  const FrameEstimate &estimate() const { return estimate_; }
-  const std::vector<int> &used_markers() const { return used_markers_; }
+  const FrameEstimate& estimate() const { return estimate_; }
+  const std::vector<int>& used_markers() const { return used_markers_; }
   int frames_processed() const { return frames_; }
   /// The filter's posterior after the last frame: [root position (mm),
   /// orientation error about reference_rotation() (rad, zero after an update),
   /// Theta (40)]; what offline smoothing keeps.
-  const GaussianXd &state() const { return state_; }
+  const GaussianXd& state() const { return state_; }
   /// The posterior of the whole state after the last frame: state() with, for
   /// the constant-velocity model, the rates (reference_rotation()'s axes, per
   /// second) appended.
-  const GaussianXd &motion_state() const {
-    return with_rates() ? motion_ : state_;
-  }
-  const Eigen::Matrix3d &reference_rotation() const {
-    return reference_rotation_;
-  }
+  const GaussianXd& motion_state() const { return with_rates() ? motion_ : state_; }
+  const Eigen::Matrix3d& reference_rotation() const { return reference_rotation_; }
   /// The prediction between two frames: x <- transition() x + w, w ~ N(0,
   /// process_noise()), on the motion state (identity for the random walk).
-  const Eigen::MatrixXd &process_noise() const { return process_noise_; }
-  const Eigen::MatrixXd &transition() const { return transition_; }
+  const Eigen::MatrixXd& process_noise() const { return process_noise_; }
+  const Eigen::MatrixXd& transition() const { return transition_; }
 
   /// One frame: the recording's points (3 x P, mm, in recording order) and
   /// which are visible. Non-finite coordinates count as not visible.
-  const FrameEstimate &
-  process(const Eigen::Matrix3Xd &points,
-          const Eigen::Array<bool, Eigen::Dynamic, 1> &visible);
+  const FrameEstimate& process(const Eigen::Matrix3Xd& points,
+                               const Eigen::Array<bool, Eigen::Dynamic, 1>& visible);
 
-private:
+ private:
   static TrackerOptions validated(TrackerOptions options, double rate_hz) {
     options.validate();
     if (!(rate_hz > 0) || !std::isfinite(rate_hz))
@@ -141,18 +128,17 @@ private:
     return options;
   }
 
-  static const SampleSet &checked(const SampleSet &samples, int dimension) {
+  static const SampleSet& checked(const SampleSet& samples, int dimension) {
     if (samples.dimension() != dimension)
-      throw std::invalid_argument(
-          "the sample set has " + std::to_string(samples.dimension()) +
-          " dimensions; the tracker's state has " + std::to_string(dimension));
+      throw std::invalid_argument("the sample set has " + std::to_string(samples.dimension()) +
+                                  " dimensions; the tracker's state has " + std::to_string(dimension));
     return samples;
   }
 
   /// Start from the first frame with enough markers: root pose from a rigid fit
   /// of the visible markers to the model's zero pose (or the paper's marker
   /// mean), joints near the zero pose.
-  void initialise(const Eigen::Matrix3Xd &points);
+  void initialise(const Eigen::Matrix3Xd& points);
 
   /// x <- A x + w with A = [I dt I; 0 I] (transition()), written out by blocks:
   /// the same result as the core's predict_linear (a test compares them) in
@@ -178,13 +164,12 @@ private:
   /// with the reference and a reflected Theta's rate changes sign.
   void recentre();
 
-  void finish(const Eigen::Matrix3Xd &points,
-              const Eigen::Array<bool, Eigen::Dynamic, 1> &visible,
+  void finish(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible,
               std::chrono::steady_clock::time_point start);
 
   /// measurement_model_.pose(state_.mean) written in place (that one returns
   /// its joint angles in a new vector), through the same bounded map.
-  void write_pose(body::Pose &pose) const;
+  void write_pose(body::Pose& pose) const;
 
   body::BodyModel model_;
   MarkerMapping mapping_;
@@ -192,21 +177,19 @@ private:
   double rate_hz_;
   SmartSamplingKalmanFilter<Eigen::Dynamic> filter_;
   body::MarkerMeasurementModel measurement_model_;
-  body::MarkerMeasurementModel
-      mean_markers_model_; ///< every model marker, for the reported pose
+  body::MarkerMeasurementModel mean_markers_model_;  ///< every model marker, for the reported pose
   std::vector<int> used_markers_;
-  GaussianXd state_;  ///< the pose posterior (what the update works on)
-  GaussianXd motion_; ///< constant velocity: [pose, rates]; its pose part
-                      ///< equals state_ between frames
+  GaussianXd state_;   ///< the pose posterior (what the update works on)
+  GaussianXd motion_;  ///< constant velocity: [pose, rates]; its pose part
+                       ///< equals state_ between frames
   MarginalUpdate marginal_update_;
   Eigen::Matrix3d reference_rotation_ = Eigen::Matrix3d::Identity();
   Eigen::MatrixXd process_noise_, transition_, noise_;
-  std::vector<std::pair<int, int>>
-      axial_pairs_; ///< joints (a, b) whose twists only add up
-  Eigen::VectorXd axial_gain_, axial_column_; ///< scratch of split_axial_twists
-  std::vector<int> repeat_frames_; ///< per used marker: frames its coordinates
-                                   ///< have repeated exactly
-  int frozen_frames_ = 0;          ///< frozen_marker_s in frames
+  std::vector<std::pair<int, int>> axial_pairs_;  ///< joints (a, b) whose twists only add up
+  Eigen::VectorXd axial_gain_, axial_column_;     ///< scratch of split_axial_twists
+  std::vector<int> repeat_frames_;                ///< per used marker: frames its coordinates
+                                                  ///< have repeated exactly
+  int frozen_frames_ = 0;                         ///< frozen_marker_s in frames
   Eigen::VectorXd measurement_;
   ObservedMask observed_;
   FrameEstimate estimate_;
@@ -218,35 +201,27 @@ private:
 // The definitions: inline here by default, or compiled once
 // (compilation_mode.hpp).
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping,
-                             TrackerOptions options, double rate_hz,
-                             const SampleSet &samples)
-    : model_(std::move(model)), mapping_(std::move(mapping)),
-      options_(validated(std::move(options), rate_hz)), rate_hz_(rate_hz),
+S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options,
+                             double rate_hz, const SampleSet& samples)
+    : model_(std::move(model)),
+      mapping_(std::move(mapping)),
+      options_(validated(std::move(options), rate_hz)),
+      rate_hz_(rate_hz),
       filter_(checked(samples, kRootDofs + model_.joint_count())),
-      measurement_model_(
-          model_, body::OrientationParameterization::local_rotation_error),
-      mean_markers_model_(
-          model_, body::OrientationParameterization::local_rotation_error) {
-  if (mapping_.point_of_marker.size() !=
-      static_cast<std::size_t>(model_.marker_count()))
-    throw std::invalid_argument(
-        "the marker mapping does not fit the body model");
+      measurement_model_(model_, body::OrientationParameterization::local_rotation_error),
+      mean_markers_model_(model_, body::OrientationParameterization::local_rotation_error) {
+  if (mapping_.point_of_marker.size() != static_cast<std::size_t>(model_.marker_count()))
+    throw std::invalid_argument("the marker mapping does not fit the body model");
   for (int m = 0; m < model_.marker_count(); ++m)
-    if (mapping_.point_of_marker[m] >= 0)
-      used_markers_.push_back(m);
-  if (used_markers_.empty())
-    throw std::invalid_argument(
-        "no recording label matches a marker of the model");
+    if (mapping_.point_of_marker[m] >= 0) used_markers_.push_back(m);
+  if (used_markers_.empty()) throw std::invalid_argument("no recording label matches a marker of the model");
   measurement_model_.select_markers(used_markers_);
   const int n = state_dimension();
   const double dt = 1.0 / rate_hz_;
   const int d = motion_state_dimension();
   process_noise_ = Eigen::MatrixXd::Zero(d, d);
-  process_noise_.diagonal().segment<3>(0).setConstant(
-      std::pow(options_.position_speed_mm_per_s * dt, 2));
-  process_noise_.diagonal().segment<3>(3).setConstant(
-      std::pow(options_.orientation_speed_rad_per_s * dt, 2));
+  process_noise_.diagonal().segment<3>(0).setConstant(std::pow(options_.position_speed_mm_per_s * dt, 2));
+  process_noise_.diagonal().segment<3>(3).setConstant(std::pow(options_.orientation_speed_rad_per_s * dt, 2));
   process_noise_.diagonal()
       .segment(kRootDofs, joint_count())
       .setConstant(std::pow(options_.joint_speed_per_s * dt, 2));
@@ -267,65 +242,47 @@ S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping,
   }
   const Eigen::Index m = 3 * static_cast<Eigen::Index>(used_markers_.size());
   if (!options_.marker_noise_mm_per_marker.empty() &&
-      options_.marker_noise_mm_per_marker.size() !=
-          static_cast<std::size_t>(model_.marker_count()))
-    throw std::invalid_argument(
-        "one marker noise per model marker is needed (or none)");
+      options_.marker_noise_mm_per_marker.size() != static_cast<std::size_t>(model_.marker_count()))
+    throw std::invalid_argument("one marker noise per model marker is needed (or none)");
   noise_ = Eigen::MatrixXd::Zero(m, m);
   for (std::size_t k = 0; k < used_markers_.size(); ++k) {
     double sd = options_.marker_noise_mm;
     if (!options_.marker_noise_mm_per_marker.empty() &&
-        !std::isnan(
-            options_.marker_noise_mm_per_marker[static_cast<std::size_t>(
-                used_markers_[k])]))
-      sd = options_.marker_noise_mm_per_marker[static_cast<std::size_t>(
-          used_markers_[k])];
-    noise_.diagonal()
-        .segment<3>(3 * static_cast<Eigen::Index>(k))
-        .setConstant(sd * sd);
+        !std::isnan(options_.marker_noise_mm_per_marker[static_cast<std::size_t>(used_markers_[k])]))
+      sd = options_.marker_noise_mm_per_marker[static_cast<std::size_t>(used_markers_[k])];
+    noise_.diagonal().segment<3>(3 * static_cast<Eigen::Index>(k)).setConstant(sd * sd);
   }
-  measurement_ =
-      Eigen::VectorXd::Constant(m, std::numeric_limits<double>::quiet_NaN());
+  measurement_ = Eigen::VectorXd::Constant(m, std::numeric_limits<double>::quiet_NaN());
   observed_.resize(m);
   repeat_frames_.assign(used_markers_.size(), 0);
-  frozen_frames_ =
-      static_cast<int>(std::ceil(options_.frozen_marker_s * rate_hz_));
-  estimate_.rejection.assign(static_cast<std::size_t>(model_.marker_count()),
-                             MarkerRejection::none);
+  frozen_frames_ = static_cast<int>(std::ceil(options_.frozen_marker_s * rate_hz_));
+  estimate_.rejection.assign(static_cast<std::size_t>(model_.marker_count()), MarkerRejection::none);
   if (options_.axial_split_sd_rad > 0) {
     const std::vector<std::string> names = model_.joint_names();
-    const auto find = [&](const char *name) {
+    const auto find = [&](const char* name) {
       const auto at = std::find(names.begin(), names.end(), name);
       return at == names.end() ? -1 : static_cast<int>(at - names.begin());
     };
-    for (const auto &[a, b] :
-         {std::pair{"BPz", "BTz"}, std::pair{"BLNz", "BUNz"}})
-      if (find(a) >= 0 && find(b) >= 0)
-        axial_pairs_.emplace_back(find(a), find(b));
+    for (const auto& [a, b] : {std::pair{"BPz", "BTz"}, std::pair{"BLNz", "BUNz"}})
+      if (find(a) >= 0 && find(b) >= 0) axial_pairs_.emplace_back(find(a), find(b));
     axial_gain_.resize(n);
     axial_column_.resize(n);
   }
   estimate_.marker_distance.resize(model_.marker_count());
 }
 
-S2KF_INLINE const FrameEstimate &
-Tracker::process(const Eigen::Matrix3Xd &points,
-                 const Eigen::Array<bool, Eigen::Dynamic, 1> &visible) {
+S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points,
+                                                  const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
   const auto start = std::chrono::steady_clock::now();
   if (points.cols() != visible.size())
-    throw std::invalid_argument(
-        "process: one visibility flag per recording point is needed");
+    throw std::invalid_argument("process: one visibility flag per recording point is needed");
   int count = 0, repeated = 0;
-  std::fill(estimate_.rejection.begin(), estimate_.rejection.end(),
-            MarkerRejection::none);
+  std::fill(estimate_.rejection.begin(), estimate_.rejection.end(), MarkerRejection::none);
   estimate_.rejected_markers = 0;
   for (std::size_t k = 0; k < used_markers_.size(); ++k) {
     const int point = mapping_.point_of_marker[used_markers_[k]];
-    const bool seen = point < points.cols() && visible(point) &&
-                      points.col(point).allFinite();
-    const bool same = seen && (measurement_.segment<3>(3 * k).array() ==
-                               points.col(point).array())
-                                  .all();
+    const bool seen = point < points.cols() && visible(point) && points.col(point).allFinite();
+    const bool same = seen && (measurement_.segment<3>(3 * k).array() == points.col(point).array()).all();
     repeat_frames_[k] = same ? repeat_frames_[k] + 1 : 0;
     for (int a = 0; a < 3; ++a) {
       observed_(3 * k + a) = seen;
@@ -341,17 +298,14 @@ Tracker::process(const Eigen::Matrix3Xd &points,
   if (frozen_frames_ > 0 && 2 * repeated < count)
     for (std::size_t k = 0; k < used_markers_.size(); ++k)
       if (repeat_frames_[k] >= frozen_frames_) {
-        observed_.segment<3>(3 * static_cast<Eigen::Index>(k))
-            .setConstant(false);
-        estimate_.rejection[static_cast<std::size_t>(used_markers_[k])] =
-            MarkerRejection::frozen;
+        observed_.segment<3>(3 * static_cast<Eigen::Index>(k)).setConstant(false);
+        estimate_.rejection[static_cast<std::size_t>(used_markers_[k])] = MarkerRejection::frozen;
         ++estimate_.rejected_markers;
         --count;
       }
   ++frames_;
   if (!initialised_) {
-    if (count >= options_.min_markers_to_start)
-      initialise(points);
+    if (count >= options_.min_markers_to_start) initialise(points);
     if (!initialised_) {
       estimate_.tracked = false;
       estimate_.status = FilterStatus::nothing_observed;
@@ -366,12 +320,10 @@ Tracker::process(const Eigen::Matrix3Xd &points,
   UpdateOptions update_options;
   update_options.gate_probability = options_.gate_probability;
   if (frames_since_start_ <= options_.converging_frames)
-    update_options.iterations = frames_since_start_ == 0
-                                    ? options_.initial_iterations
-                                    : options_.converging_iterations;
+    update_options.iterations =
+        frames_since_start_ == 0 ? options_.initial_iterations : options_.converging_iterations;
   else
-    update_options.block_gate_probability =
-        options_.marker_gate_probability; // once converged
+    update_options.block_gate_probability = options_.marker_gate_probability;  // once converged
   update_options.block_size = 3;
   ++frames_since_start_;
   estimate_.status = FilterStatus::nothing_observed;
@@ -379,67 +331,58 @@ Tracker::process(const Eigen::Matrix3Xd &points,
   if (count > 0) {
     measurement_model_.set_reference_orientation(reference_rotation_);
     const UpdateResult result =
-        filter_.update(state_, measurement_model_, measurement_, noise_,
-                       observed_, update_options);
+        filter_.update(state_, measurement_model_, measurement_, noise_, observed_, update_options);
     estimate_.status = result.status;
     estimate_.nis = result.nis;
     for (const Eigen::Index block : filter_.rejected_blocks()) {
-      estimate_.rejection[static_cast<std::size_t>(
-          used_markers_[static_cast<std::size_t>(block)])] =
+      estimate_.rejection[static_cast<std::size_t>(used_markers_[static_cast<std::size_t>(block)])] =
           MarkerRejection::innovation;
       ++estimate_.rejected_markers;
     }
+    if (result.ok()) {
+      // After the markers' update: the split of the unseen twists, the rates conditioned on the
+      // new pose, then re-centring, which folds what they moved (the orientation error among
+      // them) into the reference.
+      split_axial_twists();
+      if (with_rates()) condition_rates();
+      recentre();
+    }
   }
-  // After the markers' update: the split of the unseen twists, the rates
-  // conditioned on the new pose, then re-centring, which folds what they moved
-  // (the orientation error among them) into the reference.
-  split_axial_twists();
-  if (with_rates())
-    condition_rates();
-  recentre();
   estimate_.tracked = true;
   finish(points, visible, start);
   return estimate_;
 }
 
 S2KF_INLINE void Tracker::split_axial_twists() {
-  const double variance =
-      options_.axial_split_sd_rad * options_.axial_split_sd_rad;
-  for (const auto &[a, b] : axial_pairs_) {
+  const double variance = options_.axial_split_sd_rad * options_.axial_split_sd_rad;
+  for (const auto& [a, b] : axial_pairs_) {
     const Eigen::Index ia = kRootDofs + a, ib = kRootDofs + b;
-    const body::Joint &ja = model_.joints[static_cast<std::size_t>(a)];
-    const body::Joint &jb = model_.joints[static_cast<std::size_t>(b)];
-    const double half_a = 0.5 * (ja.upper - ja.lower),
-                 half_b = 0.5 * (jb.upper - jb.lower);
+    const body::Joint& ja = model_.joints[static_cast<std::size_t>(a)];
+    const body::Joint& jb = model_.joints[static_cast<std::size_t>(b)];
+    const double half_a = 0.5 * (ja.upper - ja.lower), half_b = 0.5 * (jb.upper - jb.lower);
     const double ta = state_.mean(ia), tb = state_.mean(ib);
     // theta = mid + half sin(Theta): h = theta_a - theta_b, H = [half_a cos
     // Theta_a, -half_b cos Theta_b].
     const double ha = half_a * std::cos(ta), hb = -half_b * std::cos(tb);
-    const double residual =
-        -(0.5 * (ja.upper + ja.lower) + half_a * std::sin(ta) -
-          0.5 * (jb.upper + jb.lower) - half_b * std::sin(tb));
-    axial_column_.noalias() = ha * state_.covariance.col(ia) +
-                              hb * state_.covariance.col(ib); // C H^T
-    const double innovation_variance =
-        ha * axial_column_(ia) + hb * axial_column_(ib) + variance;
+    const double residual = -(0.5 * (ja.upper + ja.lower) + half_a * std::sin(ta) -
+                              0.5 * (jb.upper + jb.lower) - half_b * std::sin(tb));
+    axial_column_.noalias() = ha * state_.covariance.col(ia) + hb * state_.covariance.col(ib);  // C H^T
+    const double innovation_variance = ha * axial_column_(ia) + hb * axial_column_(ib) + variance;
     axial_gain_ = axial_column_ / innovation_variance;
     state_.mean.noalias() += residual * axial_gain_;
     state_.covariance.noalias() -= axial_gain_ * axial_column_.transpose();
   }
 }
 
-S2KF_INLINE void Tracker::initialise(const Eigen::Matrix3Xd &points) {
+S2KF_INLINE void Tracker::initialise(const Eigen::Matrix3Xd& points) {
   const int n = state_dimension();
   state_.mean = Eigen::VectorXd::Zero(n);
   state_.covariance = Eigen::MatrixXd::Zero(n, n);
-  Eigen::Matrix3Xd measured(3, estimate_.visible_markers),
-      reference(3, estimate_.visible_markers);
-  const Eigen::Matrix3Xd zero_pose =
-      body::marker_positions(model_, body::zero_pose(model_));
+  Eigen::Matrix3Xd measured(3, estimate_.visible_markers), reference(3, estimate_.visible_markers);
+  const Eigen::Matrix3Xd zero_pose = body::marker_positions(model_, body::zero_pose(model_));
   int k = 0;
   for (std::size_t u = 0; u < used_markers_.size(); ++u) {
-    if (!observed_(3 * u))
-      continue;
+    if (!observed_(3 * u)) continue;
     measured.col(k) = points.col(mapping_.point_of_marker[used_markers_[u]]);
     reference.col(k) = zero_pose.col(used_markers_[u]);
     ++k;
@@ -453,40 +396,33 @@ S2KF_INLINE void Tracker::initialise(const Eigen::Matrix3Xd &points) {
     position = fit.translation;
   }
   state_.mean.head<3>() = position;
-  state_.covariance.diagonal().head<3>().setConstant(
-      std::pow(options_.initial_position_sd_mm, 2));
+  state_.covariance.diagonal().head<3>().setConstant(std::pow(options_.initial_position_sd_mm, 2));
   if (!options_.rigid_initialisation) {
     // The paper: C_r is the sample covariance of the first frame's markers.
     const Eigen::Matrix3Xd centred = measured.colwise() - centroid;
     state_.covariance.topLeftCorner<3, 3>() =
         centred * centred.transpose() / std::max<Eigen::Index>(1, k - 1);
   }
-  state_.covariance.diagonal().segment<3>(3).setConstant(
-      std::pow(options_.initial_orientation_sd_rad, 2));
+  state_.covariance.diagonal().segment<3>(3).setConstant(std::pow(options_.initial_orientation_sd_rad, 2));
   // Joints: the paper starts every joint at mid-range (Theta = 0); the default
   // starts at the zero pose (standing) but keeps a joint whose zero lies on a
   // limit a little inside it, where sin still has slope, so the filter can move
   // it.
   if (options_.joints_start_near_zero_pose) {
     for (int j = 0; j < joint_count(); ++j) {
-      const double lower = model_.joints[j].lower,
-                   upper = model_.joints[j].upper;
-      if (upper <= lower)
-        continue;
-      const double normalised = std::clamp(
-          (0.0 - 0.5 * (upper + lower)) / (0.5 * (upper - lower)), -0.8, 0.8);
+      const double lower = model_.joints[j].lower, upper = model_.joints[j].upper;
+      if (upper <= lower) continue;
+      const double normalised =
+          std::clamp((0.0 - 0.5 * (upper + lower)) / (0.5 * (upper - lower)), -0.8, 0.8);
       state_.mean(kRootDofs + j) = std::asin(normalised);
     }
   }
-  state_.covariance.diagonal()
-      .tail(joint_count())
-      .setConstant(std::pow(options_.initial_joint_sd, 2));
+  state_.covariance.diagonal().tail(joint_count()).setConstant(std::pow(options_.initial_joint_sd, 2));
   if (with_rates()) {
-    motion_.mean = Eigen::VectorXd::Zero(2 * n); // at rest
+    motion_.mean = Eigen::VectorXd::Zero(2 * n);  // at rest
     motion_.covariance = Eigen::MatrixXd::Zero(2 * n, 2 * n);
     motion_.covariance.topLeftCorner(n, n) = state_.covariance;
-    motion_.covariance.diagonal().segment<3>(n).setConstant(
-        std::pow(options_.initial_position_rate_sd, 2));
+    motion_.covariance.diagonal().segment<3>(n).setConstant(std::pow(options_.initial_position_rate_sd, 2));
     motion_.covariance.diagonal().segment<3>(n + 3).setConstant(
         std::pow(options_.initial_orientation_rate_sd, 2));
     motion_.covariance.diagonal()
@@ -500,14 +436,13 @@ S2KF_INLINE void Tracker::initialise(const Eigen::Matrix3Xd &points) {
 S2KF_INLINE void Tracker::predict_constant_velocity() {
   const Eigen::Index n = state_dimension();
   const double dt = 1.0 / rate_hz_;
-  Eigen::VectorXd &m = motion_.mean;
-  Eigen::MatrixXd &c = motion_.covariance;
+  Eigen::VectorXd& m = motion_.mean;
+  Eigen::MatrixXd& c = motion_.covariance;
   m.head(n) += dt * m.tail(n);
   // C_pp += dt (C_pv + C_vp) + dt^2 C_vv, C_pv += dt C_vv (and C_vp as its
   // transpose), then + Q.
   c.topLeftCorner(n, n) +=
-      dt * (c.topRightCorner(n, n) + c.bottomLeftCorner(n, n)) +
-      (dt * dt) * c.bottomRightCorner(n, n);
+      dt * (c.topRightCorner(n, n) + c.bottomLeftCorner(n, n)) + (dt * dt) * c.bottomRightCorner(n, n);
   c.topRightCorner(n, n) += dt * c.bottomRightCorner(n, n);
   c.bottomLeftCorner(n, n) = c.topRightCorner(n, n).transpose();
   c += process_noise_;
@@ -516,11 +451,9 @@ S2KF_INLINE void Tracker::predict_constant_velocity() {
 }
 
 S2KF_INLINE void Tracker::condition_rates() {
-  if (marginal_update_.apply(motion_, state_))
-    return;
+  if (marginal_update_.apply(motion_, state_)) return;
   motion_.mean.head(state_dimension()) = state_.mean;
-  motion_.covariance.topLeftCorner(state_dimension(), state_dimension()) =
-      state_.covariance;
+  motion_.covariance.topLeftCorner(state_dimension(), state_dimension()) = state_.covariance;
 }
 
 S2KF_INLINE void Tracker::recentre() {
@@ -539,60 +472,46 @@ S2KF_INLINE void Tracker::recentre() {
   state_.covariance = motion_.covariance.topLeftCorner(n, n);
 }
 
-S2KF_INLINE void
-Tracker::finish(const Eigen::Matrix3Xd &points,
-                const Eigen::Array<bool, Eigen::Dynamic, 1> &visible,
-                std::chrono::steady_clock::time_point start) {
-  estimate_.marker_distance.setConstant(
-      std::numeric_limits<double>::quiet_NaN());
+S2KF_INLINE void Tracker::finish(const Eigen::Matrix3Xd& points,
+                                 const Eigen::Array<bool, Eigen::Dynamic, 1>& visible,
+                                 std::chrono::steady_clock::time_point start) {
+  estimate_.marker_distance.setConstant(std::numeric_limits<double>::quiet_NaN());
   estimate_.mean_marker_distance = std::numeric_limits<double>::quiet_NaN();
   if (estimate_.tracked) {
     estimate_.root_rotation = reference_rotation_;
     measurement_model_.set_reference_orientation(reference_rotation_);
     write_pose(estimate_.pose);
-    estimate_.covariance =
-        state_.covariance; // same size every frame: no allocation
+    estimate_.covariance = state_.covariance;  // same size every frame: no allocation
     // Every model marker at the mean, through the batched model
     // (allocation-free after its first call); it equals
     // marker_positions(model_, pose) to rounding.
     const Eigen::Index markers = model_.marker_count();
-    if (estimate_.predicted_markers.cols() != markers)
-      estimate_.predicted_markers.resize(3, markers);
+    if (estimate_.predicted_markers.cols() != markers) estimate_.predicted_markers.resize(3, markers);
     mean_markers_model_.set_reference_orientation(reference_rotation_);
-    mean_markers_model_(
-        state_.mean, Eigen::Map<Eigen::MatrixXd>(
-                         estimate_.predicted_markers.data(), 3 * markers, 1));
+    mean_markers_model_(state_.mean,
+                        Eigen::Map<Eigen::MatrixXd>(estimate_.predicted_markers.data(), 3 * markers, 1));
     double sum = 0;
     int count = 0;
     for (int m = 0; m < model_.marker_count(); ++m) {
       const int point = mapping_.point_of_marker[m];
-      if (point < 0 || point >= points.cols() || !visible(point) ||
-          !points.col(point).allFinite())
-        continue;
-      const double d =
-          (points.col(point) - estimate_.predicted_markers.col(m)).norm();
+      if (point < 0 || point >= points.cols() || !visible(point) || !points.col(point).allFinite()) continue;
+      const double d = (points.col(point) - estimate_.predicted_markers.col(m)).norm();
       estimate_.marker_distance(m) = d;
       sum += d;
       ++count;
     }
-    if (count > 0)
-      estimate_.mean_marker_distance = sum / count;
+    if (count > 0) estimate_.mean_marker_distance = sum / count;
   }
-  estimate_.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-          .count();
+  estimate_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-S2KF_INLINE void Tracker::write_pose(body::Pose &pose) const {
+S2KF_INLINE void Tracker::write_pose(body::Pose& pose) const {
   pose.root_position = state_.mean.head<3>();
-  pose.root_rpy = body::rpy_from_rotation(
-      measurement_model_.root_rotation(state_.mean.segment<3>(3)));
-  const body::BoundedJoints &joints = measurement_model_.bounded_joints();
-  if (pose.joints.size() != joint_count())
-    pose.joints.resize(joint_count());
-  for (int j = 0; j < joint_count(); ++j)
-    pose.joints(j) = joints.angle(j, state_.mean(kRootDofs + j));
+  pose.root_rpy = body::rpy_from_rotation(measurement_model_.root_rotation(state_.mean.segment<3>(3)));
+  const body::BoundedJoints& joints = measurement_model_.bounded_joints();
+  if (pose.joints.size() != joint_count()) pose.joints.resize(joint_count());
+  for (int j = 0; j < joint_count(); ++j) pose.joints(j) = joints.angle(j, state_.mean(kRootDofs + j));
 }
-#endif // S2KF_DEFINE_HEAVY
+#endif  // S2KF_DEFINE_HEAVY
 
-} // namespace s2kf::track
+}  // namespace s2kf::track
