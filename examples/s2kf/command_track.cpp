@@ -143,7 +143,7 @@ nlohmann::json truth_json(const track::TruthComparison& accuracy) {
 /// output files; returns the summary and the paragraph to print.
 TrackOutcome track_file(const std::string& input, const std::string& prefix, const TrackSettings& settings,
                         bool show_progress) {
-  throw_if_interrupted();    // a batch stops at the next recording
+  throw_if_interrupted();     // a batch stops at the next recording
   track::StageTimes outside;  // stages outside the session and the run: opening, finishing the files
   auto stage_start = std::chrono::steady_clock::now();
   std::unique_ptr<c3d::C3dFrameSource> source;

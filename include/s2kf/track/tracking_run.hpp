@@ -7,8 +7,8 @@
 
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/segment_observation.hpp>
+#include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <functional>
