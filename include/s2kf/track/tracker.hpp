@@ -39,17 +39,6 @@ enum class MarkerRejection : std::uint8_t {
                ///< marker)
 };
 
-inline const char* to_string(MarkerRejection rejection) {
-  switch (rejection) {
-    case MarkerRejection::innovation:
-      return "innovation";
-    case MarkerRejection::frozen:
-      return "frozen";
-    default:
-      return "none";
-  }
-}
-
 /// What the tracker knows after one frame.
 struct FrameEstimate {
   bool tracked = false;  ///< false before the first frame with enough markers
