@@ -30,6 +30,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "address_sanitizer.hpp"
 
 namespace {
 
@@ -149,6 +150,7 @@ TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
 /// thresholds; measured values are printed): joint angles RMS over all joints, and the marker
 /// distance after convergence.
 TEST(BundledMarkerSets, EachTracksASimulatedRecordingOfItsOwnMarkers) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   for (const char* name :
        {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation", "plugin_gait"}) {
     const body::MarkerSet set = bundled(name);
@@ -205,6 +207,7 @@ TEST(PartialMarkerSets, LowerBodyRecordingWritesTheUpperBodyAsNotObserved) {
 }
 
 TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const body::MarkerSet set = bundled("plugin_gait_upper");
   const Simulated s = simulate_with(set, 13);
   const Tracked t = track_simulated(s, set);
@@ -221,6 +224,7 @@ TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
 }
 
 TEST(PartialMarkerSets, CountsFramesWithoutAVisibleMarkerPerSegment) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const body::MarkerSet set = bundled("plugin_gait_lower");
   const Simulated s = simulate_with(set, 21, {sim::SegmentDropout{"LA", 1.0, 0.5}});
   const Tracked t = track_simulated(s, set);

@@ -33,6 +33,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "address_sanitizer.hpp"
 
 namespace {
 
@@ -346,6 +347,7 @@ TEST(Evaluation, TruthThatDoesNotFitIsRejected) {
 }
 
 TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path out = fresh_scratch("evaluate_short");
   const CommandResult result =
       run_command("evaluate --frames 60 --runs 2 --samples 93 --no-calibrate --quiet --out " + out.string());
@@ -425,6 +427,7 @@ TEST(EvaluateCommand, BadInputGivesASentenceAndExitStatusOne) {
 // --motion simulates a realistic subject and reports the true-subject fit beside the S2KF; the
 // numbers are the library's for the same subject and recording.
 TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path out = fresh_scratch("evaluate_motion");
   const CommandResult result = run_command(
       "evaluate --motion walk --subject-seed 2 --frames 80 --runs 1 --samples 93 --no-calibrate --smooth "

@@ -17,6 +17,7 @@
 
 #include <string>
 #include <vector>
+#include "address_sanitizer.hpp"
 
 namespace {
 
@@ -74,6 +75,7 @@ void print(const char* what, const track::TruthComparison& t) {
 // removes is the frame-to-frame noise and the lag, which shows most in the limb flexion angles and,
 // under occlusion, in the segment orientations.
 TEST(TrackingSmoother, LowersTheErrorAgainstTruthOnTheBundledWalk) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const Smoothed s = track_and_smooth("walk");
   print("filtered", s.filtered);
   print("smoothed", s.smoothed);
@@ -91,6 +93,7 @@ TEST(TrackingSmoother, LowersTheErrorAgainstTruthOnTheBundledWalk) {
 }
 
 TEST(TrackingSmoother, LowersTheErrorAgainstTruthOnTheOccludedHandstand) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const Smoothed s = track_and_smooth("handstand_occluded");
   print("filtered", s.filtered);
   print("smoothed", s.smoothed);
@@ -102,6 +105,7 @@ TEST(TrackingSmoother, LowersTheErrorAgainstTruthOnTheOccludedHandstand) {
 }
 
 TEST(TrackingSmoother, StaysOnTheCartwheelThroughPitchNinetyDegrees) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const Smoothed s = track_and_smooth("cartwheel");
   print("filtered", s.filtered);
   print("smoothed", s.smoothed);
@@ -119,6 +123,7 @@ TEST(TrackingSmoother, StaysOnTheCartwheelThroughPitchNinetyDegrees) {
 // flexion 3.69 -> 2.97; cartwheel segments 10.56 -> 10.60, all joints 9.54 -> 9.81, root
 // 3.57 -> 3.53 deg), and the joints stay in their limits on both.
 TEST(TrackingSmoother, WorksWithTheConstantVelocityModel) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   track::TrackerOptions options;
   options.motion_model = track::MotionModel::constant_velocity;
   const Smoothed walk = track_and_smooth("walk", 0, options);
