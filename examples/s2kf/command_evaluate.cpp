@@ -6,6 +6,7 @@
 #include "gnuplot.hpp"
 #include "marker_set_json.hpp"
 #include "motion_json.hpp"
+#include "track_summary.hpp"
 #include "tracker_samples.hpp"
 
 #include <s2kf/io/atomic_file.hpp>
@@ -78,8 +79,6 @@ std::vector<int> parse_samples(const std::string& text) {
   return counts;
 }
 
-json number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
-
 std::string cell(double value) {
   if (!std::isfinite(value)) return "nan";
   std::ostringstream s;
@@ -98,31 +97,18 @@ std::string machine_name() {
   return "unknown";
 }
 
-json truth_json(const track::TruthComparison& t) {
-  json segments = json::object();
-  for (const auto& [name, rms] : t.segment_rms_deg) segments[name] = number(rms);
-  return {{"frames_compared", t.frames},
-          {"segment_orientation_rms_deg", t.segment_orientation_rms_deg},
-          {"limb_flexion_rms_deg", t.limb_flexion_rms_deg},
-          {"all_joint_rms_deg", t.all_joint_rms_deg},
-          {"worst_joint", t.worst_joint},
-          {"worst_joint_rms_deg", t.worst_joint_rms_deg},
-          {"root_position_rms_mm", t.root_position_rms_mm},
-          {"root_orientation_rms_deg", t.root_orientation_rms_deg},
-          {"joint_limit_violations", t.joint_limit_violations},
-          {"segment_rms_deg", segments}};
-}
-
 json result_json(const track::MethodResult& r) {
   json j = {{"method", track::to_string(r.method)},
             {"samples", r.samples ? json(r.samples) : json(nullptr)},
             {"converged_frame", r.converged_frame},
-            {"mean_marker_distance_mm", number(r.level_mm)},
+            {"mean_marker_distance_mm", number_or_null(r.level_mm)},
             {"worst_frame_after_convergence", r.worst_frame},
-            {"worst_marker_distance_after_convergence_mm", number(r.worst_mm)},
-            {"worst_marker_distance_mm", number(r.worst_all_frames_mm)},
+            {"worst_marker_distance_after_convergence_mm", number_or_null(r.worst_mm)},
+            {"worst_marker_distance_mm", number_or_null(r.worst_all_frames_mm)},
             {"latency_ms",
-             {{"median", number(r.median_ms)}, {"p99", number(r.p99_ms)}, {"max", number(r.max_ms)}}}};
+             {{"median", number_or_null(r.median_ms)},
+              {"p99", number_or_null(r.p99_ms)},
+              {"max", number_or_null(r.max_ms)}}}};
   if (r.truth) j["truth"] = truth_json(*r.truth);
   return j;
 }
@@ -457,13 +443,13 @@ void run_evaluate(const EvaluateSettings& settings) {
     std::vector<double> after_mean(
         band.mean.begin() + std::min<long>(settings.warmup, static_cast<long>(band.mean.size())),
         band.mean.end());
-    return json{{"mean_after_warmup_mm", number(track::mean_from(after_mean, 0))},
-                {"band_max_after_warmup_mm", number(worst)},
-                {"band_max_median_after_warmup_mm", number(track::quantile(after_max, 0.5))},
+    return json{{"mean_after_warmup_mm", number_or_null(track::mean_from(after_mean, 0))},
+                {"band_max_after_warmup_mm", number_or_null(worst)},
+                {"band_max_median_after_warmup_mm", number_or_null(track::quantile(after_max, 0.5))},
                 {"run_level_mm",
-                 {{"mean", number(track::mean_from(levels, 0))},
-                  {"min", number(track::quantile(levels, 0))},
-                  {"max", number(track::quantile(levels, 1))}}}};
+                 {{"mean", number_or_null(track::mean_from(levels, 0))},
+                  {"min", number_or_null(track::quantile(levels, 0))},
+                  {"max", number_or_null(track::quantile(levels, 1))}}}};
   };
   occlusion_json["s2kf"] = band_json(study.s2kf, study.s2kf_level, study.s2kf_worst_mm);
   occlusion_json["baseline"] = band_json(study.baseline, study.baseline_level, study.baseline_worst_mm);

@@ -11,6 +11,7 @@
 #include <s2kf/track/tracking_smoother.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
+#include "tracked_recording.hpp"
 #include "tracker_samples.hpp"
 
 #include <gtest/gtest.h>
@@ -34,10 +35,9 @@ Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0,
   const std::string base = std::string(S2KF_DATA_DIR) + "/" + name;
   const c3d::Recording recording = c3d::read_c3d(base + ".c3d");
   const io::MotionTable truth = io::load_motion_csv(base + "_truth.csv");
-  std::vector<std::string> labels;
-  for (const auto& label : recording.info.labels) labels.push_back(label.name);
   body::BodyModel model = body::mmm_body_model(1000);
-  const track::MarkerMapping mapping = track::map_markers(labels, model.marker_names());
+  const track::MarkerMapping mapping =
+      track::map_markers(test_support::labels_of(recording), model.marker_names());
   track::HeightEstimator heights(model, mapping);
   for (Eigen::Index f = 0; f < recording.frame_count(); f += 5)
     heights.add_frame(recording.frame(f), recording.visible.col(f));
@@ -45,15 +45,7 @@ Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0,
   track::Tracker tracker(model, mapping, options, recording.info.rate, test::tracker_samples());
   track::TrackingSmoother smoother(tracker);
   const Eigen::Index end = frames > 0 ? std::min(frames, recording.frame_count()) : recording.frame_count();
-  Eigen::Index f = 0;
-  auto next = [&](MarkerFrame& frame) {
-    if (f >= end) return false;
-    frame.index = f;
-    frame.positions = recording.frame(f);
-    frame.visible = recording.visible.col(f);
-    ++f;
-    return true;
-  };
+  auto next = test_support::frames_of(recording, end);
   const track::TrackingRun run = track::run_tracking(tracker, next, recording.info.rate, model.joint_names(),
                                                      false, [&](long row) { smoother.record(tracker, row); });
   Smoothed s{{}, {}, run.motion, run.motion, model};
