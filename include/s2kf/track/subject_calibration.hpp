@@ -60,9 +60,11 @@ struct CalibrationOptions {
   /// of one marker coordinate seen in every frame used is not moved from the marker set. These are
   /// the gauge directions (all markers of an end segment turned about its joint's axes, which a
   /// constant joint-angle offset undoes; a bone length against the markers beyond it) and the
-  /// directions close to them, which soft tissue would otherwise decide. 0: every direction is
-  /// estimated, the priors weighing in as usual.
-  double prior_only_fraction = 0.3;
+  /// directions close to them, which soft tissue would otherwise decide. 0 (default): every
+  /// direction is estimated, the priors weighing in as usual. 0.3 made the segments of simulated
+  /// subjects better on some motions and worse on others (docs/tracking.md, "Gauge-aware subject
+  /// calibration"), so it is not the default.
+  double prior_only_fraction = 0;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
   int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
   /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
