@@ -3,6 +3,10 @@
 /// stderr together).
 #pragma once
 
+#include "test_files.hpp"
+
+#include <gtest/gtest.h>
+
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -25,6 +29,15 @@ inline CommandResult run_command(const std::string& arguments) {
   while (pipe && fgets(buffer, sizeof buffer, pipe)) output += buffer;
   const int status = pipe ? pclose(pipe) : -1;
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+/// Simulates a recording with `s2kf simulate OPTIONS` into the scratch folder "sim"; returns the
+/// prefix of its files (PREFIX.c3d, PREFIX_truth.csv, PREFIX_clean.csv).
+inline std::string simulate_with_program(const std::string& name, const std::string& options) {
+  const std::filesystem::path out = scratch("sim") / (name + ".c3d");
+  const CommandResult r = run_command("simulate " + options + " --out " + out.string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  return (scratch("sim") / name).string();
 }
 #endif
 

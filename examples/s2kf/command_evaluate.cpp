@@ -3,9 +3,10 @@
 // sweep, accuracy against ground truth; CSV series, gnuplot figures and a summary.json.
 #include "bundled_motions.hpp"
 #include "command.hpp"
-#include "gnuplot.hpp"
+#include "evaluation_files.hpp"
 #include "marker_set_json.hpp"
 #include "motion_json.hpp"
+#include "track_summary.hpp"
 #include "tracker_samples.hpp"
 
 #include <s2kf/io/atomic_file.hpp>
@@ -79,15 +80,6 @@ std::vector<int> parse_samples(const std::string& text) {
   return counts;
 }
 
-json number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
-
-std::string cell(double value) {
-  if (!std::isfinite(value)) return "nan";
-  std::ostringstream s;
-  s << std::setprecision(7) << value;
-  return s.str();
-}
-
 std::string machine_name() {
   std::ifstream cpuinfo("/proc/cpuinfo");
   std::string line;
@@ -99,21 +91,6 @@ std::string machine_name() {
   return "unknown";
 }
 
-json truth_json(const track::TruthComparison& t) {
-  json segments = json::object();
-  for (const auto& [name, rms] : t.segment_rms_deg) segments[name] = number(rms);
-  return {{"frames_compared", t.frames},
-          {"segment_orientation_rms_deg", t.segment_orientation_rms_deg},
-          {"limb_flexion_rms_deg", t.limb_flexion_rms_deg},
-          {"all_joint_rms_deg", t.all_joint_rms_deg},
-          {"worst_joint", t.worst_joint},
-          {"worst_joint_rms_deg", t.worst_joint_rms_deg},
-          {"root_position_rms_mm", t.root_position_rms_mm},
-          {"root_orientation_rms_deg", t.root_orientation_rms_deg},
-          {"joint_limit_violations", t.joint_limit_violations},
-          {"segment_rms_deg", segments}};
-}
-
 json hidden_time_json(const track::HiddenTimeError& e) {
   const auto bins = [](const std::vector<track::HiddenTimeBin>& b) {
     json out = json::array();
@@ -121,7 +98,7 @@ json hidden_time_json(const track::HiddenTimeError& e) {
       out.push_back({{"hidden_from_s", bin.lower_s},
                      {"hidden_to_s", std::isfinite(bin.upper_s) ? json(bin.upper_s) : json(nullptr)},
                      {"frames", bin.frames},
-                     {"rms_deg", number(bin.rms_deg)}});
+                     {"rms_deg", number_or_null(bin.rms_deg)}});
     return out;
   };
   json segments = json::object();
@@ -134,12 +111,14 @@ json result_json(const track::MethodResult& r) {
   json j = {{"method", track::to_string(r.method)},
             {"samples", r.samples ? json(r.samples) : json(nullptr)},
             {"converged_frame", r.converged_frame},
-            {"mean_marker_distance_mm", number(r.level_mm)},
+            {"mean_marker_distance_mm", number_or_null(r.level_mm)},
             {"worst_frame_after_convergence", r.worst_frame},
-            {"worst_marker_distance_after_convergence_mm", number(r.worst_mm)},
-            {"worst_marker_distance_mm", number(r.worst_all_frames_mm)},
+            {"worst_marker_distance_after_convergence_mm", number_or_null(r.worst_mm)},
+            {"worst_marker_distance_mm", number_or_null(r.worst_all_frames_mm)},
             {"latency_ms",
-             {{"median", number(r.median_ms)}, {"p99", number(r.p99_ms)}, {"max", number(r.max_ms)}}}};
+             {{"median", number_or_null(r.median_ms)},
+              {"p99", number_or_null(r.p99_ms)},
+              {"max", number_or_null(r.max_ms)}}}};
   if (r.truth) j["truth"] = truth_json(*r.truth);
   return j;
 }
@@ -168,17 +147,6 @@ Simulated simulate_for_evaluation(const EvaluateSettings& settings) {
     throw UserError(file.string() + ": " + e.what());
   }
   return simulated;
-}
-
-void write_csv(const fs::path& path, const std::string& header, std::size_t rows,
-               const std::function<void(std::ostream&, std::size_t)>& row) {
-  io::write_file_atomically(path, [&](std::ostream& out) {
-    out << header << "\n";
-    for (std::size_t r = 0; r < rows; ++r) {
-      row(out, r);
-      out << "\n";
-    }
-  });
 }
 
 void run_evaluate(const EvaluateSettings& settings) {
@@ -327,140 +295,14 @@ void run_evaluate(const EvaluateSettings& settings) {
   say("occlusion: " + cell(study.mean_hidden_overall) + " of " + std::to_string(study.markers) +
       " markers hidden on average; S2KF band up to " + cell(study.s2kf_worst_mm) + " mm after the warm-up");
 
-  // CSV series.
+  // The CSV series and the figures.
   const fs::path out(settings.out);
   fs::create_directories(out);
-  auto time_of = [&](std::size_t f) { return static_cast<double>(f) / setup.rate_hz; };
-  std::vector<std::string> written;
-  auto add = [&](const std::string& name) { written.push_back(name); };
-  write_csv(out / "marker_distance.csv", "frame,time,s2kf_mm,baseline_mm", frames,
-            [&](std::ostream& o, std::size_t f) {
-              o << f << "," << cell(time_of(f)) << "," << cell(s2kf.run.mean_marker_distance[f]) << ","
-                << cell(baseline.run.mean_marker_distance[f]);
-            });
-  add("marker_distance.csv");
-  write_csv(
-      out / "occlusion_band.csv",
-      "frame,time,s2kf_min_mm,s2kf_max_mm,s2kf_mean_mm,baseline_min_mm,baseline_max_mm,baseline_mean_mm",
-      frames, [&](std::ostream& o, std::size_t f) {
-        o << f << "," << cell(time_of(f)) << "," << cell(study.s2kf.min[f]) << "," << cell(study.s2kf.max[f])
-          << "," << cell(study.s2kf.mean[f]) << "," << cell(study.baseline.min[f]) << ","
-          << cell(study.baseline.max[f]) << "," << cell(study.baseline.mean[f]);
-      });
-  add("occlusion_band.csv");
-  const int examples = std::min(3, study.runs);
-  std::string hidden_header = "frame,time";
-  for (int r = 0; r < examples; ++r) hidden_header += ",run" + std::to_string(r + 1);
-  write_csv(out / "hidden_markers.csv", hidden_header + ",mean", frames, [&](std::ostream& o, std::size_t f) {
-    o << f << "," << cell(time_of(f));
-    for (int r = 0; r < examples; ++r) o << "," << study.hidden[static_cast<std::size_t>(r)][f];
-    o << "," << cell(study.mean_hidden[f]);
-  });
-  add("hidden_markers.csv");
-  std::string runtime_header = "frame,time";
-  for (int samples : sample_counts) runtime_header += ",s2kf_L" + std::to_string(samples) + "_ms";
-  write_csv(out / "runtime.csv", runtime_header + ",baseline_ms", frames,
-            [&](std::ostream& o, std::size_t f) {
-              o << f << "," << cell(time_of(f));
-              for (const auto& r : sweep) o << "," << cell(1000 * r.run.seconds[f]);
-              o << "," << cell(1000 * baseline.run.seconds[f]);
-            });
-  add("runtime.csv");
-  if (truth) {
-    write_csv(out / "joint_error.csv", "frame,time,s2kf_deg,baseline_deg", frames,
-              [&](std::ostream& o, std::size_t f) {
-                o << f << "," << cell(time_of(f)) << "," << cell(s2kf.truth->per_frame_joint_rms_deg[f])
-                  << "," << cell(baseline.truth->per_frame_joint_rms_deg[f]);
-              });
-    add("joint_error.csv");
-  }
-  write_csv(
-      out / "samples.csv",
-      "samples,median_ms,p99_ms,max_ms,mean_marker_distance_mm,converged_frame,segment_orientation_rms_deg,"
-      "limb_flexion_rms_deg,all_joint_rms_deg",
-      sweep.size(), [&](std::ostream& o, std::size_t k) {
-        const auto& r = sweep[k];
-        o << r.samples << "," << cell(r.median_ms) << "," << cell(r.p99_ms) << "," << cell(r.max_ms) << ","
-          << cell(r.level_mm) << "," << r.converged_frame;
-        for (double v :
-             {r.truth ? r.truth->segment_orientation_rms_deg : NAN,
-              r.truth ? r.truth->limb_flexion_rms_deg : NAN, r.truth ? r.truth->all_joint_rms_deg : NAN})
-          o << "," << cell(v);
-      });
-  add("samples.csv");
-
-  // Figures.
+  const EvaluationSeries series{setup.rate_hz,     frames,         sweep, s2kf, baseline, study,
+                                truth.has_value(), settings.warmup};
+  std::vector<std::string> written = write_evaluation_series(out, series);
   std::vector<std::string> figure_problems;
-  const bool gnuplot = have_gnuplot();
-  if (!gnuplot)
-    figure_problems.push_back(
-        "gnuplot is not installed (Debian: apt-get install gnuplot-nox): no figures were drawn; "
-        "the CSV files hold every series");
-  auto figure = [&](const std::string& name, const std::string& body) {
-    std::string problem;
-    if (!gnuplot) return;
-    if (plot(out, name, body, problem)) {
-      add(name + ".png");
-      add(name + ".svg");
-    } else {
-      figure_problems.push_back(problem);
-    }
-  };
-  const std::string L = std::to_string(main_samples);
-  figure(
-      "fig3_marker_distance",
-      "  set title 'Average marker distance per frame (paper Fig. 3)'\n"
-      "  set xlabel 'frame'; set ylabel 'mean marker distance (mm)'\n"
-      "  plot 'occlusion_band.csv' using 1:3:4 with filledcurves fs transparent solid 0.3 lc rgb '#1f77b4' "
-      "title 'S2KF with occlusion, min-max over " +
-          std::to_string(study.runs) +
-          " runs', \\\n"
-          "       'occlusion_band.csv' using 1:5 with lines lw 1 dt 2 lc rgb '#1f77b4' title 'S2KF with "
-          "occlusion, mean', \\\n"
-          "       'marker_distance.csv' using 1:3 with lines lw 2 lc rgb '#ff7f0e' title 'S2KF (L = " +
-          L +
-          ")', \\\n"
-          "       'marker_distance.csv' using 1:4 with lines lw 2 lc rgb '#2ca02c' title 'gradient "
-          "baseline'");
-  std::string runtime_plot =
-      "  set title 'Runtime per frame (paper Fig. 4)'\n"
-      "  set xlabel 'frame'; set ylabel 'ms'; set logscale y\n  plot ";
-  for (std::size_t k = 0; k < sweep.size(); ++k)
-    runtime_plot += "'runtime.csv' using 1:" + std::to_string(3 + k) +
-                    " with lines title 'S2KF L = " + std::to_string(sweep[k].samples) + "', ";
-  runtime_plot += "'runtime.csv' using 1:" + std::to_string(3 + sweep.size()) +
-                  " with lines lc rgb '#2ca02c' title 'gradient baseline'\n  unset logscale y";
-  figure("fig4_runtime", runtime_plot);
-  std::string hidden_plot =
-      "  set title 'Hidden markers per frame (paper Fig. 7)'\n"
-      "  set xlabel 'frame'; set ylabel 'hidden markers'\n  plot ";
-  for (int r = 0; r < examples; ++r)
-    hidden_plot += "'hidden_markers.csv' using 1:" + std::to_string(3 + r) + " with lines title 'run " +
-                   std::to_string(r + 1) + "', ";
-  hidden_plot += "'hidden_markers.csv' using 1:" + std::to_string(3 + examples) +
-                 " with lines lw 2 lc rgb 'black' title 'mean over " + std::to_string(study.runs) + " runs'";
-  figure("fig7_hidden_markers", hidden_plot);
-  if (truth)
-    figure("joint_error",
-           "  set title 'Joint-angle error against the truth (RMS over the 40 joints, after a " +
-               std::to_string(settings.warmup) +
-               "-frame warm-up)'\n"
-               "  set xlabel 'frame'; set ylabel 'degrees'\n"
-               "  plot 'joint_error.csv' using 1:3 with lines lw 2 lc rgb '#ff7f0e' title 'S2KF (L = " +
-               L +
-               ")', 'joint_error.csv' using 1:4 with lines lw 2 lc rgb '#2ca02c' title 'gradient baseline'");
-  figure("samples",
-         "  set multiplot layout 1,2 title 'S2KF against the sample count L'\n"
-         "  set xlabel 'samples L'; set ylabel 'latency per frame (ms)'; set key top left\n"
-         "  plot 'samples.csv' using 1:2 with linespoints title 'median', 'samples.csv' using 1:3 with "
-         "linespoints "
-         "title 'p99'\n"
-         "  set ylabel 'error'\n"
-         "  plot 'samples.csv' using 1:5 with linespoints title 'marker distance (mm)', 'samples.csv' using "
-         "1:7 with "
-         "linespoints title 'segment orientation RMS (deg)', 'samples.csv' using 1:9 with linespoints title "
-         "'all-joint RMS (deg)'\n"
-         "  unset multiplot");
+  draw_evaluation_figures(out, series, written, figure_problems);
 
   // Summary.
   json occlusion_json = {
@@ -483,13 +325,13 @@ void run_evaluate(const EvaluateSettings& settings) {
     std::vector<double> after_mean(
         band.mean.begin() + std::min<long>(settings.warmup, static_cast<long>(band.mean.size())),
         band.mean.end());
-    return json{{"mean_after_warmup_mm", number(track::mean_from(after_mean, 0))},
-                {"band_max_after_warmup_mm", number(worst)},
-                {"band_max_median_after_warmup_mm", number(track::quantile(after_max, 0.5))},
+    return json{{"mean_after_warmup_mm", number_or_null(track::mean_from(after_mean, 0))},
+                {"band_max_after_warmup_mm", number_or_null(worst)},
+                {"band_max_median_after_warmup_mm", number_or_null(track::quantile(after_max, 0.5))},
                 {"run_level_mm",
-                 {{"mean", number(track::mean_from(levels, 0))},
-                  {"min", number(track::quantile(levels, 0))},
-                  {"max", number(track::quantile(levels, 1))}}}};
+                 {{"mean", number_or_null(track::mean_from(levels, 0))},
+                  {"min", number_or_null(track::quantile(levels, 0))},
+                  {"max", number_or_null(track::quantile(levels, 1))}}}};
   };
   occlusion_json["s2kf"] = band_json(study.s2kf, study.s2kf_level, study.s2kf_worst_mm);
   occlusion_json["baseline"] = band_json(study.baseline, study.baseline_level, study.baseline_worst_mm);

@@ -3,8 +3,10 @@
 #include "command.hpp"
 #include "extra_outputs.hpp"
 #include "frame_figure.hpp"
+#include "frame_reports.hpp"
 #include "interruption.hpp"
 #include "marker_set_json.hpp"
+#include "recording_batch.hpp"
 #include "track_summary.hpp"
 #include "tracker_samples.hpp"
 #include "viewer/result_page.hpp"  // --html
@@ -80,65 +82,6 @@ struct TrackOutcome {
   std::string paragraph;
 };
 
-std::string format(double value, int precision = 1) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(precision) << value;
-  return s.str();
-}
-
-/// The per-frame marker report PREFIX_markers.csv: its header, and one line per frame.
-void write_marker_report_header(std::ostream& out) {
-  out << "frame,time,mean_marker_distance_mm,visible_markers\n";
-}
-void write_marker_report_row(std::ostream& out, long frame, double time, double mean_marker_distance,
-                             int visible_markers) {
-  out << std::setprecision(9) << frame << "," << time << ",";
-  if (std::isfinite(mean_marker_distance))
-    out << mean_marker_distance;
-  else
-    out << "nan";
-  out << "," << visible_markers << "\n";
-}
-
-/// The per-frame segment report PREFIX_segments.csv: per segment, the filter's largest standard
-/// deviation of its angles this frame (deg, segment_uncertainty_deg; "nan" where the frame was not
-/// filtered, e.g. rows replayed after smoothing).
-void write_segment_report_header(std::ostream& out, const track::SegmentObservation& segments) {
-  out << "frame,time";
-  for (const std::string& segment : segments.segments) out << "," << segment << "_sd_deg";
-  out << "\n";
-}
-void write_segment_report_row(std::ostream& out, const track::Session& session,
-                              const track::TrackedFrame& f) {
-  Eigen::VectorXd sd = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(session.segments.segments.size()),
-                                                 std::numeric_limits<double>::quiet_NaN());
-  if (f.estimate && f.estimate->tracked)
-    sd = track::segment_uncertainty_deg(session.model, session.segments, f.estimate->pose.joints,
-                                        f.estimate->covariance);
-  out << std::setprecision(6) << f.frame << "," << f.time;
-  for (Eigen::Index s = 0; s < sd.size(); ++s) {
-    if (std::isfinite(sd(s)))
-      out << "," << sd(s);
-    else
-      out << ",nan";
-  }
-  out << "\n";
-}
-
-/// The accuracy against a simulated recording's truth, as the summary's "truth" object.
-nlohmann::json truth_json(const track::TruthComparison& accuracy) {
-  return {{"frames_compared", accuracy.frames},
-          {"warmup_frames", kTruthWarmupFrames},
-          {"all_joint_rms_deg", accuracy.all_joint_rms_deg},
-          {"segment_orientation_rms_deg", accuracy.segment_orientation_rms_deg},
-          {"limb_flexion_rms_deg", accuracy.limb_flexion_rms_deg},
-          {"root_position_rms_mm", accuracy.root_position_rms_mm},
-          {"root_orientation_rms_deg", accuracy.root_orientation_rms_deg},
-          {"worst_joint", accuracy.worst_joint},
-          {"worst_joint_rms_deg", accuracy.worst_joint_rms_deg},
-          {"joint_limit_violations", accuracy.joint_limit_violations}};
-}
-
 /// Tracks one recording through the library's pipeline (prepare a session, run it) into the
 /// output files; returns the summary and the paragraph to print.
 TrackOutcome track_file(const std::string& input, const std::string& prefix, const TrackSettings& settings,
@@ -185,7 +128,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                                  static_cast<double>(track::TrackingSmoother::bytes_per_frame(with_rates));
   if (settings.smooth && smoothing_bytes > kSmoothingMemoryLimitBytes)
     throw UserError(input + ": " + std::to_string(info.frame_count) +
-                    " frames are too many to smooth in memory (" + format(smoothing_bytes / 1e9, 1) +
+                    " frames are too many to smooth in memory (" + fixed_text(smoothing_bytes / 1e9, 1) +
                     " GB); track without --smooth, or split the recording");
   if (settings.figure_frame >= info.frame_count)
     throw UserError(input + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
@@ -276,7 +219,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   hooks.sink = [&](const track::TrackedFrame& f) {
     throw_if_interrupted();
     motion_files.append(f.frame, f.time, f.values);
-    write_marker_report_row(marker_report, f.frame, f.time, f.mean_marker_distance, f.visible_markers);
+    write_marker_report_row(marker_report, f);
     write_segment_report_row(segment_report, session, f);
     if (f.frame == settings.figure_frame && io::is_tracked_row(f.values))
       figure_pose = body::pose_from_row(f.values);
@@ -328,7 +271,10 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   nlohmann::json summary = track_summary(input, settings.method, choice, messages, session, run,
                                          settings.smooth, warnings, outside);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
-  if (accuracy) summary["truth"] = truth_json(*accuracy);
+  if (accuracy) {
+    summary["truth"] = truth_json(*accuracy);
+    summary["truth"]["warmup_frames"] = kTruthWarmupFrames;
+  }
   // Labels and file names are UTF-8 (the reader decodes Latin-1); anything else is replaced, never
   // a reason to lose the run.
   motion_files.companion(prefix + ".json")
@@ -338,46 +284,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (settings.html)
     viewer::write_result_page(prefix, session.model, session.mapping, settings.truth);  // --html
 
-  const long converged = summary["converged_frame"].get<long>();
-  const double level = summary_number(summary["mean_marker_distance_mm"]);
-  const double overall = summary_number(summary["mean_marker_distance_all_frames_mm"]);
-  const double median_ms = summary["latency_ms"]["median"].get<double>();
-  const double p99_ms = summary["latency_ms"]["p99"].get<double>();
-  const nlohmann::json& calibration_summary = summary["calibration"];
   std::ostringstream paragraph;
-  for (const std::string& message : messages) paragraph << message << "\n";
-  paragraph << name << ": tracked " << run.frames_tracked << " of " << run.frames << " frames at "
-            << format(info.rate, 0) << " Hz with " << summary["markers_used"].size() << " markers ("
-            << session.mapping.ignored_labels.size() << " labels ignored), body height "
-            << format(session.height_mm, 0) << " mm (" << session.height_source << "), marker set "
-            << choice.set.name;
-  const auto millimetres = [](const nlohmann::json& value) {
-    return value.is_number() && std::isfinite(value.get<double>()) ? format(value.get<double>(), 1)
-                                                                   : std::string("n/a");
-  };
-  if (session.calibration)
-    paragraph << ", calibrated on " << session.calibration_frames << " frames ("
-              << millimetres(calibration_summary["mean_marker_distance_before_mm"]) << " -> "
-              << millimetres(calibration_summary["mean_marker_distance_after_mm"]) << " mm)";
-  if (std::isfinite(level))
-    paragraph << ". Converged at frame " << converged << "; mean marker distance after that "
-              << format(level, 1) << " mm (" << format(overall, 1) << " mm over all tracked frames)";
-  else
-    paragraph << ". The marker distance never settled (its median over a second stayed above 1.5 times its "
-                 "median over the recording); mean "
-              << format(overall, 1) << " mm over all tracked frames";
-  paragraph << ". Latency per frame: median " << format(median_ms, 3) << " ms, p99 " << format(p99_ms, 3)
-            << " ms";
-  if (settings.method == "s2kf") paragraph << " (" << session.tracker.samples << " samples)";
-  paragraph << ".";
-  if (settings.smooth) paragraph << " Motion smoothed (RTS); marker distances are the filter's.";
-  if (settings.realtime) paragraph << " Real-time pacing: " << deadline_misses << " deadline misses.";
-  if (accuracy)
-    paragraph << " Against the truth (frames " << kTruthWarmupFrames << " on): all-joint RMS "
-              << format(accuracy->all_joint_rms_deg, 2) << " deg, segment orientation "
-              << format(accuracy->segment_orientation_rms_deg, 2) << " deg, limb flexion "
-              << format(accuracy->limb_flexion_rms_deg, 2) << " deg, root position "
-              << format(accuracy->root_position_rms_mm, 1) << " mm.";
+  paragraph << track_paragraph(summary, name);
   if (!warnings.empty())
     paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
   paragraph << "\n" << written_files_sentence(prefix, settings.outputs);
@@ -388,88 +296,10 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     const track::StageTimes times = session.times + run.times + outside;  // as in the summary
     paragraph << "\nSeconds per stage:";
     for (const auto& [stage, seconds] : track::stage_list(times))
-      paragraph << " " << stage << " " << format(seconds, 3) << (stage == "writing" ? "" : ",");
-    paragraph << " (" << format(times.sum(), 3) << " in all).";
+      paragraph << " " << stage << " " << fixed_text(seconds, 3) << (stage == "writing" ? "" : ",");
+    paragraph << " (" << fixed_text(times.sum(), 3) << " in all).";
   }
   return {summary, paragraph.str()};
-}
-
-/// A recording to track and the name of its outputs: its path below the folder it was found in,
-/// without the extension ("S01/Walk01"), or its file name for a file given as such.
-struct Recording {
-  std::string input;
-  std::string name;
-};
-
-bool is_c3d_file(const fs::directory_entry& entry) {
-  std::string ext = entry.path().extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".c3d" && entry.is_regular_file();
-}
-
-/// The recordings of the command line: every .c3d file in a folder, at any depth, named by its path
-/// below that folder (so outputs mirror the folders and same-named takes of different subjects
-/// stay apart), and every file given as such, named after itself. Sorted by name: the order
-/// --shard deals out, the same on every machine wherever the data are mounted.
-std::vector<Recording> find_recordings(const std::vector<std::string>& inputs) {
-  std::vector<Recording> recordings;
-  for (const std::string& input : inputs) {
-    if (fs::is_directory(input)) {
-      std::size_t found = 0;
-      for (const auto& entry :
-           fs::recursive_directory_iterator(input, fs::directory_options::skip_permission_denied))
-        if (is_c3d_file(entry)) {
-          recordings.push_back({entry.path().string(),
-                                entry.path().lexically_relative(input).replace_extension().generic_string()});
-          ++found;
-        }
-      if (found == 0)
-        throw UserError(input + " is a folder without .c3d files (its subfolders searched too)");
-    } else if (!fs::exists(input)) {
-      throw UserError(input + ": no such file");
-    } else {
-      recordings.push_back({input, fs::path(input).stem().string()});
-    }
-  }
-  std::sort(recordings.begin(), recordings.end(), [](const Recording& a, const Recording& b) {
-    return std::tie(a.name, a.input) < std::tie(b.name, b.input);
-  });
-  return recordings;
-}
-
-/// --shard I/N: the recordings whose place in the sorted list is I modulo N (I from 0 to N-1), so N
-/// runs with I = 0..N-1 track every recording exactly once, in parts that differ by one at most.
-std::vector<Recording> shard_of(const std::vector<Recording>& recordings, const std::string& shard) {
-  const auto slash = shard.find('/');
-  const auto whole_number = [](const std::string& text) {
-    return !text.empty() && text.size() <= 9 && text.find_first_not_of("0123456789") == std::string::npos;
-  };
-  if (slash == std::string::npos || !whole_number(shard.substr(0, slash)) ||
-      !whole_number(shard.substr(slash + 1)))
-    throw UserError("--shard " + shard + ": expected I/N with whole numbers 0 <= I < N, e.g. --shard 0/8");
-  const std::size_t index = std::stoul(shard.substr(0, slash)), count = std::stoul(shard.substr(slash + 1));
-  if (count == 0 || index >= count)
-    throw UserError("--shard " + shard + ": I counts from 0 and must be smaller than N (the shards of N = " +
-                    std::to_string(count) + " are 0/" + std::to_string(count) + " to " +
-                    std::to_string(count == 0 ? 0 : count - 1) + "/" + std::to_string(count) + ")");
-  std::vector<Recording> part;
-  for (std::size_t k = index; k < recordings.size(); k += count) part.push_back(recordings[k]);
-  return part;
-}
-
-/// An error of one recording in a batch as one line that starts with the recording's path.
-std::string error_naming_file(const std::string& input, const std::exception& error) {
-  if (const auto* c3d_error = dynamic_cast<const c3d::C3dError*>(&error))
-    return input + ": " + c3d_error->sentence();
-  const std::string what = error.what();
-  return what.rfind(input, 0) == 0 ? what : input + ": " + what;
-}
-
-/// In place of the summary of a recording that failed in a batch: PREFIX.json with its error, which
-/// s2kf summarize lists. Outputs an earlier run left under the prefix stay as they were.
-void record_failure(const std::string& input, const std::string& prefix, const std::string& error) {
-  const nlohmann::json record = {{"input", input}, {"status", "failed"}, {"error", error}};
-  io::write_file_atomically(prefix + ".json", [&](std::ostream& out) { out << record.dump(2) << "\n"; });
 }
 
 void run_track(const TrackSettings& settings) {
@@ -489,12 +319,7 @@ void run_track(const TrackSettings& settings) {
   // prefix of the one recording's files.
   const bool out_is_folder =
       batch || (!settings.out.empty() && (settings.out.back() == '/' || fs::is_directory(settings.out)));
-  std::vector<std::string> prefixes;
-  for (const Recording& recording : todo)
-    prefixes.push_back(out_is_folder
-                           ? (fs::path(settings.out.empty() ? "." : settings.out) / recording.name).string()
-                       : settings.out.empty() ? recording.name
-                                              : settings.out);
+  const std::vector<std::string> prefixes = output_prefixes(todo, settings.out, out_is_folder);
   check_outputs(settings.outputs, prefixes, !settings.truth.empty());
   if (settings.dry_run || todo.empty()) {
     if (todo.empty() && !settings.quiet)
@@ -514,57 +339,9 @@ void run_track(const TrackSettings& settings) {
   // PREFIX.json records why) and the others go on; the exit status says that some failed.
   const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
   const unsigned jobs = settings.jobs > 0 ? static_cast<unsigned>(settings.jobs) : hardware;
-  // Largest files first: a long recording started last would leave the other threads idle at the
-  // end. (Were times proportional to sizes, longest-first would stay within 4/3 of the best order.)
-  std::vector<std::uintmax_t> bytes;
-  for (const Recording& recording : todo) {
-    std::error_code error;
-    const std::uintmax_t size = fs::file_size(recording.input, error);
-    bytes.push_back(error ? 0 : size);
-  }
-  std::vector<std::size_t> order(todo.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return bytes[a] > bytes[b]; });
-  std::atomic<std::size_t> next{0};
-  std::mutex print;
-  std::vector<std::string> failures;
-  auto worker = [&]() {
-    for (std::size_t n; (n = next++) < todo.size();) {
-      const std::size_t i = order[n];
-      const std::string& input = todo[i].input;
-      try {
-        fs::create_directories(fs::path(prefixes[i]).parent_path());
-        const TrackOutcome outcome = track_file(input, prefixes[i], settings, false);
-        std::lock_guard<std::mutex> lock(print);
-        if (!settings.quiet) std::cout << outcome.paragraph << "\n\n" << std::flush;
-      } catch (const std::exception& e) {
-        const std::string message = error_naming_file(input, e);
-        std::string unrecorded;
-        try {
-          record_failure(input, prefixes[i], message);
-        } catch (const std::exception& f) {
-          unrecorded = error_naming_file(input, f);
-        }
-        std::lock_guard<std::mutex> lock(print);
-        failures.push_back(input);
-        std::cerr << "s2kf: " << message << "\n";
-        if (!unrecorded.empty()) std::cerr << "s2kf: " << unrecorded << "\n";
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (unsigned t = 0; t < std::min<std::size_t>(jobs, todo.size()); ++t) threads.emplace_back(worker);
-  for (auto& thread : threads) thread.join();
-  if (failures.empty()) return;
-  std::sort(failures.begin(), failures.end());
-  constexpr std::size_t kNamed = 10;  // a failure list longer than this ends in "and N more"
-  std::string list;
-  for (std::size_t i = 0; i < std::min(kNamed, failures.size()); ++i) list += (i ? ", " : "") + failures[i];
-  if (failures.size() > kNamed) list += " and " + std::to_string(failures.size() - kNamed) + " more";
-  throw UserError(std::to_string(failures.size()) + " of " + std::to_string(todo.size()) +
-                  " recordings could not be tracked: " + list +
-                  " (errors above and in each one's .json; the others were tracked)");
+  track_in_batch(todo, prefixes, jobs, settings.quiet, [&](std::size_t i) {
+    return track_file(todo[i].input, prefixes[i], settings, false).paragraph;
+  });
 }
 
 const RegisterCommand track_registration{
@@ -591,9 +368,9 @@ const RegisterCommand track_registration{
       app.add_option("--subject", settings->subject, "calibrated subject file written by s2kf calibrate");
       app.add_flag("!--no-calibrate", settings->calibrate,
                    "track with the marker set as it is (default: calibrate marker offsets and bone lengths "
-                   "on the recording's first frames)");
+                   "on stretches of frames spread over the recording)");
       app.add_option("--calibration-frames", settings->calibration_frames,
-                     "frames from the start the calibration uses (default 1200)")
+                     "frames the calibration uses, in stretches spread over the recording (default 1200)")
           ->check(CLI::Range(10, 10000000));
       app.add_flag(
           "--smooth", settings->smooth,

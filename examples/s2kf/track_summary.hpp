@@ -8,11 +8,14 @@
 
 #include <s2kf/track/session.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
+#include <s2kf/track/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <iomanip>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -118,6 +121,80 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
       {"unobserved", unobserved},
       {"warnings", warnings},
   };
+}
+
+/// `value` with `precision` digits after the point ("12.3").
+inline std::string fixed_text(double value, int precision) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << value;
+  return s.str();
+}
+
+/// The accuracy against a simulated recording's truth, as the summary's "truth" object.
+inline nlohmann::json truth_json(const track::TruthComparison& t) {
+  nlohmann::json segments = nlohmann::json::object();
+  for (const auto& [name, rms] : t.segment_rms_deg) segments[name] = number_or_null(rms);
+  return {{"frames_compared", t.frames},
+          {"segment_orientation_rms_deg", t.segment_orientation_rms_deg},
+          {"limb_flexion_rms_deg", t.limb_flexion_rms_deg},
+          {"all_joint_rms_deg", t.all_joint_rms_deg},
+          {"worst_joint", t.worst_joint},
+          {"worst_joint_rms_deg", t.worst_joint_rms_deg},
+          {"root_position_rms_mm", t.root_position_rms_mm},
+          {"root_orientation_rms_deg", t.root_orientation_rms_deg},
+          {"joint_limit_violations", t.joint_limit_violations},
+          {"segment_rms_deg", segments}};
+}
+
+/// What `s2kf track` prints about a tracked recording, read from its summary (so the text and
+/// PREFIX.json never disagree): the marker set's messages, then one paragraph of frames, markers,
+/// height, calibration, convergence, latency, smoothing, pacing, the truth and the warnings.
+inline std::string track_paragraph(const nlohmann::json& summary, const std::string& name) {
+  const auto millimetres = [](const nlohmann::json& value) {
+    return value.is_number() && std::isfinite(value.get<double>()) ? fixed_text(value.get<double>(), 1)
+                                                                   : std::string("n/a");
+  };
+  std::ostringstream paragraph;
+  for (const auto& message : summary["marker_set_messages"]) paragraph << message.get<std::string>() << "\n";
+  paragraph << name << ": tracked " << summary["frames_tracked"].get<long>() << " of "
+            << summary["frames"].get<long>() << " frames at " << fixed_text(summary["rate"].get<double>(), 0)
+            << " Hz with " << summary["markers_used"].size() << " markers ("
+            << summary["labels_ignored"].size() << " labels ignored), body height "
+            << fixed_text(summary["height_mm"].get<double>(), 0) << " mm ("
+            << summary["height_source"].get<std::string>() << "), marker set "
+            << summary["marker_set"].get<std::string>();
+  const nlohmann::json& calibration = summary["calibration"];
+  if (!calibration.is_null())
+    paragraph << ", calibrated on " << calibration["frames"].get<long>() << " frames ("
+              << millimetres(calibration["mean_marker_distance_before_mm"]) << " -> "
+              << millimetres(calibration["mean_marker_distance_after_mm"]) << " mm)";
+  const double level = summary_number(summary["mean_marker_distance_mm"]);
+  const double overall = summary_number(summary["mean_marker_distance_all_frames_mm"]);
+  if (std::isfinite(level))
+    paragraph << ". Converged at frame " << summary["converged_frame"].get<long>()
+              << "; mean marker distance after that " << fixed_text(level, 1) << " mm ("
+              << fixed_text(overall, 1) << " mm over all tracked frames)";
+  else
+    paragraph << ". The marker distance never settled (its median over a second stayed above 1.5 times its "
+                 "median over the recording); mean "
+              << fixed_text(overall, 1) << " mm over all tracked frames";
+  paragraph << ". Latency per frame: median " << fixed_text(summary["latency_ms"]["median"].get<double>(), 3)
+            << " ms, p99 " << fixed_text(summary["latency_ms"]["p99"].get<double>(), 3) << " ms";
+  if (!summary["samples"].is_null()) paragraph << " (" << summary["samples"].get<int>() << " samples)";
+  paragraph << ".";
+  if (summary["smoothed"].get<bool>())
+    paragraph << " Motion smoothed (RTS); marker distances are the filter's.";
+  if (summary.contains("deadline_misses"))
+    paragraph << " Real-time pacing: " << summary["deadline_misses"].get<long>() << " deadline misses.";
+  if (summary.contains("truth")) {
+    const nlohmann::json& truth = summary["truth"];
+    paragraph << " Against the truth (frames " << truth["warmup_frames"].get<long>() << " on): all-joint RMS "
+              << fixed_text(truth["all_joint_rms_deg"].get<double>(), 2) << " deg, segment orientation "
+              << fixed_text(truth["segment_orientation_rms_deg"].get<double>(), 2) << " deg, limb flexion "
+              << fixed_text(truth["limb_flexion_rms_deg"].get<double>(), 2) << " deg, root position "
+              << fixed_text(truth["root_position_rms_mm"].get<double>(), 1) << " mm.";
+  }
+  return paragraph.str();
 }
 
 }  // namespace s2kf::cli

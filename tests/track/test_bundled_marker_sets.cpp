@@ -16,7 +16,6 @@
 #include <s2kf/track/session.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
-#include "cli_runner.hpp"
 #include "tracker_samples.hpp"
 
 #include <gtest/gtest.h>
@@ -30,6 +29,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "address_sanitizer.hpp"
 
 namespace {
 
@@ -149,6 +149,7 @@ TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
 /// thresholds; measured values are printed): joint angles RMS over all joints, and the marker
 /// distance after convergence.
 TEST(BundledMarkerSets, EachTracksASimulatedRecordingOfItsOwnMarkers) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   for (const char* name :
        {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation", "plugin_gait"}) {
     const body::MarkerSet set = bundled(name);
@@ -205,6 +206,7 @@ TEST(PartialMarkerSets, LowerBodyRecordingWritesTheUpperBodyAsNotObserved) {
 }
 
 TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const body::MarkerSet set = bundled("plugin_gait_upper");
   const Simulated s = simulate_with(set, 13);
   const Tracked t = track_simulated(s, set);
@@ -221,6 +223,7 @@ TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
 }
 
 TEST(PartialMarkerSets, CountsFramesWithoutAVisibleMarkerPerSegment) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const body::MarkerSet set = bundled("plugin_gait_lower");
   const Simulated s = simulate_with(set, 21, {sim::SegmentDropout{"LA", 1.0, 0.5}});
   const Tracked t = track_simulated(s, set);
@@ -249,46 +252,6 @@ TEST(PartialMarkerSets, PelvisOnlyIsRefused) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("only the pelvis carries markers"), std::string::npos) << e.what();
   }
-}
-
-/// A real lower-body recording (c3d.org's Motion Analysis gait sample, labels such as R.ASIS,
-/// L.Knee): the program picks the lower-body set, tracks the legs, and marks the rest as not
-/// observed in the CSV, the summary and the segment report.
-TEST(PartialMarkerSets, ProgramMarksTheUnobservedBodyInEveryOutput) {
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "partial";
-  fs::create_directories(dir);
-  const std::string prefix = (dir / "walk1").string();
-  const auto [status, output] = test_support::run_command(
-      "track " + std::string(S2KF_C3D_DATA_DIR) + "/Walk1.c3d --quiet --formats csv,mot --out " + prefix);
-  ASSERT_EQ(status, 0) << output;
-  std::ifstream summary_file(prefix + ".json");
-  const nlohmann::json summary = nlohmann::json::parse(summary_file);
-  EXPECT_EQ(summary["marker_set"], "plugin_gait_lower");
-  EXPECT_EQ(summary["unobserved"]["segments"],
-            (std::vector<std::string>{"BP", "BT", "BLN", "BUN", "LS", "LE", "LW", "RS", "RE", "RW"}));
-  EXPECT_EQ(summary["segments"].size(), 17u);
-  const io::MotionTable motion = io::load_motion_csv(prefix + ".csv");
-  const int lsx =
-      6 + static_cast<int>(std::find(motion.joint_names.begin(), motion.joint_names.end(), "LSx") -
-                           motion.joint_names.begin());
-  const int lkx =
-      6 + static_cast<int>(std::find(motion.joint_names.begin(), motion.joint_names.end(), "LKx") -
-                           motion.joint_names.begin());
-  long tracked = 0;
-  for (Eigen::Index r = 0; r < motion.frames(); ++r) {
-    EXPECT_TRUE(std::isnan(motion.values(r, lsx))) << r;
-    tracked += std::isfinite(motion.values(r, lkx));
-  }
-  EXPECT_EQ(tracked, motion.frames());
-  std::ifstream segments(prefix + "_segments.csv");
-  std::string header;
-  std::getline(segments, header);
-  EXPECT_EQ(header.rfind("frame,time,root_sd_deg,BP_sd_deg,", 0), 0u) << header;
-  // .mot cannot hold NaN: it has every frame, with the unobserved angles at 0.
-  std::ifstream mot(prefix + ".mot");
-  std::stringstream text;
-  text << mot.rdbuf();
-  EXPECT_EQ(text.str().find("nan"), std::string::npos);
 }
 
 TEST(SegmentUncertainty, BoundedAngleSdMatchesMonteCarloAndItsLimits) {

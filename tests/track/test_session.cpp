@@ -12,6 +12,7 @@
 
 #include <string>
 #include <vector>
+#include "address_sanitizer.hpp"
 
 namespace {
 
@@ -22,6 +23,7 @@ std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DI
 body::MarkerSet kit_like_set() { return body::model_marker_set(body::mmm_body_model(1000)); }
 
 TEST(Session, FileAndMemorySourcesGiveTheSameSessionAndRun) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   c3d::C3dFrameSource file(data_file("handstand.c3d"));
   const MarkerSequence all = c3d::read_c3d(data_file("handstand.c3d"));
   const MarkerSequence head = all.frames(0, 150);

@@ -21,6 +21,7 @@
 #include <fstream>
 #include <string>
 #include <vector>
+#include "address_sanitizer.hpp"
 
 #ifdef S2KF_CLI
 
@@ -134,6 +135,7 @@ std::string ViewerPage::recording_, ViewerPage::truth_, ViewerPage::plain_, View
   if (!unavailable_.empty()) GTEST_SKIP() << "chromium cannot run: " << unavailable_
 
 TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   SKIP_WITHOUT_CHROMIUM();
   const long frame = 100;
   // Only the skeleton: the markers and the truth would cover joint pixels.
@@ -192,6 +194,7 @@ TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
 }
 
 TEST_F(ViewerPage, TimelineMovesTheSkeleton) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   SKIP_WITHOUT_CHROMIUM();
   const nlohmann::json state = open_page(plain_ + ".html", "#frame=10&scrub=120");
   ASSERT_TRUE(state.value("ok", false)) << state.dump();
@@ -206,6 +209,7 @@ TEST_F(ViewerPage, TimelineMovesTheSkeleton) {
 }
 
 TEST_F(ViewerPage, TruthIsShownAndTheDataLayoutIsAsDocumented) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string page = page_text(plain_ + ".html");
   const std::size_t begin = page.find("<script type=\"application/json\" id=\"s2kf-meta\">");
   ASSERT_NE(begin, std::string::npos);
@@ -225,6 +229,7 @@ TEST_F(ViewerPage, TruthIsShownAndTheDataLayoutIsAsDocumented) {
 }
 
 TEST_F(ViewerPage, ViewRebuildsTheTrackedModelOfACalibratedRun) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   // `s2kf view` rebuilds the calibrated subject from the summary and the recording; its page must
   // hold exactly the data of the page `track --html` wrote with the model in memory.
   const std::string tracked = page_text(calibrated_ + ".html");
@@ -243,6 +248,7 @@ TEST_F(ViewerPage, ViewRebuildsTheTrackedModelOfACalibratedRun) {
 }
 
 TEST_F(ViewerPage, LongMotionsAreDecimatedAndThePageSaysSo) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   SKIP_WITHOUT_CHROMIUM();
   const std::string prefix = (kWork / "decimated").string();
   for (const char* suffix : {".csv", ".json"})
@@ -261,6 +267,7 @@ TEST_F(ViewerPage, LongMotionsAreDecimatedAndThePageSaysSo) {
 }
 
 TEST_F(ViewerPage, DamagedDataBlocksAreNamedOnThePage) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   SKIP_WITHOUT_CHROMIUM();
   const std::string good = page_text(plain_ + ".html");
   const std::string marker = "id=\"s2kf-data\">";
@@ -298,6 +305,7 @@ TEST_F(ViewerPage, DamagedDataBlocksAreNamedOnThePage) {
 }
 
 TEST_F(ViewerPage, ViewOfABadPrefixSaysWhyAndWritesNothing) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = kWork / "bad";
   fs::create_directories(dir);
   const std::string missing = (dir / "nothing").string();

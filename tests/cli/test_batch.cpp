@@ -18,6 +18,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "address_sanitizer.hpp"
 
 namespace s2kf {
 namespace {
@@ -94,6 +95,7 @@ std::string two_subjects(const std::string& name) {
 }
 
 TEST(Batch, OutputsMirrorTheSubfoldersAtOneJobAndAtTwo) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = two_subjects("batch_mirror");
   std::map<int, std::string> csv_of_jobs;
   for (int jobs : {1, 2}) {
@@ -115,6 +117,7 @@ TEST(Batch, OutputsMirrorTheSubfoldersAtOneJobAndAtTwo) {
 }
 
 TEST(Batch, OneBadFileFailsAloneNamedAndRecordedAndLeavesNoPartialOutput) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = two_subjects("batch_bad_file");
   {
     std::ofstream broken(dir + "/in/S02/broken.c3d", std::ios::binary);
@@ -139,6 +142,7 @@ TEST(Batch, OneBadFileFailsAloneNamedAndRecordedAndLeavesNoPartialOutput) {
 }
 
 TEST(Batch, SummarizeGivesOneRowPerRecordingWithTheValuesOfItsSummary) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = two_subjects("batch_summarize");
   {
     std::ofstream broken(dir + "/in/S02/broken.c3d", std::ios::binary);
@@ -317,6 +321,7 @@ TEST(Batch, AMalformedShardIsRefused) {
 }
 
 TEST(Batch, OutEndingInASlashOrNamingAFolderIsAFolderForOneRecordingToo) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = scratch_directory("batch_out_folder");
   auto result =
       run_command("track " + data("walk.c3d") + " --formats csv" + kFast + " --out " + dir + "/new/");
@@ -349,6 +354,7 @@ TEST(Batch, TheC3dCommandOnAFolderSaysItIsAFolder) {
 }
 
 TEST(Batch, SecondsPerStageAreInTheSummaryAndPrintedWithVerbose) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = scratch_directory("batch_stage_times");
   const auto start = std::chrono::steady_clock::now();
   const auto result =

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "address_sanitizer.hpp"
 
 namespace s2kf {
 namespace {
@@ -57,6 +58,7 @@ std::vector<double> bvh_offsets(const std::string& path) {
 }
 
 TEST(OutputOptions, FormatsWritesExactlyTheChosenFilesAndTheAlwaysWrittenOnes) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = scratch_directory("output_options_formats");
   const auto result = run_command(kFastTrack + " --formats csv,osim --out " + dir + "/run");
   ASSERT_EQ(result.status, 0) << result.output;
@@ -66,6 +68,7 @@ TEST(OutputOptions, FormatsWritesExactlyTheChosenFilesAndTheAlwaysWrittenOnes) {
 }
 
 TEST(OutputOptions, DerivativesWriteVelocityAndAccelerationWithTheCsvHeaderAndOneRowPerFrame) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = scratch_directory("output_options_derivatives");
   const auto result = run_command(kFastTrack + " --formats csv --derivatives --out " + dir + "/run");
   ASSERT_EQ(result.status, 0) << result.output;
@@ -88,6 +91,7 @@ TEST(OutputOptions, DerivativesWriteVelocityAndAccelerationWithTheCsvHeaderAndOn
 }
 
 TEST(OutputOptions, CentimetreBvhOffsetsAreAHundredTimesTheMetreOnes) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = scratch_directory("output_options_bvh_units");
   const auto metres = run_command(kFastTrack + " --formats bvh --out " + dir + "/metres");
   ASSERT_EQ(metres.status, 0) << metres.output;

@@ -26,6 +26,7 @@
 #include <limits>
 #include <map>
 #include <string>
+#include "address_sanitizer.hpp"
 
 namespace {
 
@@ -184,6 +185,7 @@ io::MotionTable truth_table(const Synthetic& s, const body::BodyModel& model) {
 }
 
 TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   // A 1830 mm subject without soft tissue: marker placement (8 mm SD per coordinate) and segment
   // lengths (3 % SD) that the bundle adjustment can recover down to the sensor noise (0.7 mm). The
   // model is scaled to the height estimated from the markers, as s2kf track does.
@@ -223,6 +225,7 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
 }
 
 TEST(SubjectCalibration, LowersJointAngleErrorAndKeepsJointsInsideLimits) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const Synthetic s = make_synthetic(300, 8.0, 11);  // default soft tissue
   const body::BodyModel model = body::mmm_body_model(1750);
   const track::SubjectCalibration calibration = calibrate(model, s);
@@ -265,6 +268,7 @@ TEST(SubjectCalibration, RejectsInputsThatCannotBeCalibrated) {
 // Per-marker noise (a marker set's noise_mm) in the tracker: equal values change nothing, and a
 // marker given a huge noise no longer moves the estimate when its measurements go wrong.
 TEST(TrackerMarkerNoise, NoisyMarkerBarelyMovesTheEstimate) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const Synthetic s = make_synthetic(80, 8.0, 3);
   const body::BodyModel model = body::mmm_body_model(1750);
   const track::TrackerOptions plain = fast_options();

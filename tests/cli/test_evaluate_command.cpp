@@ -1,0 +1,171 @@
+// The `s2kf evaluate` command: its results folder, its numbers against the library's, the true-
+// subject reference of a simulated motion, and the sentences bad input gets.
+//
+// Sizes are small on purpose (60 frames, L = 93, 2 runs): the suite also runs under sanitizers.
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/motion_files.hpp>
+#include <s2kf/sim/occlusion.hpp>
+#include <s2kf/sim/recording.hpp>
+#include <s2kf/sim/subject.hpp>
+#include <s2kf/track/evaluation.hpp>
+#include <s2kf/track/gradient_baseline.hpp>
+#include <s2kf/track/tracker.hpp>
+#include <s2kf/track/tracking_metrics.hpp>
+#include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/true_subject_reference.hpp>
+#include <s2kf/track/truth_metrics.hpp>
+
+#include "../../examples/s2kf/motion_json.hpp"
+
+#include "cli_runner.hpp"
+
+#include "test_files.hpp"
+#include "tracked_recording.hpp"
+#include "tracker_samples.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+#include "address_sanitizer.hpp"
+
+namespace {
+
+using namespace s2kf;
+namespace fs = std::filesystem;
+using namespace test_support;
+
+using test_support::CommandResult;
+using test_support::run_command;
+
+/// The number after "key": at its first occurrence after `after` in a JSON text.
+double json_number(const std::string& text, const std::string& key, const std::string& after = "") {
+  const std::size_t start = after.empty() ? 0 : text.find("\"" + after + "\"");
+  const std::size_t at = text.find("\"" + key + "\":", start == std::string::npos ? 0 : start);
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(text.c_str() + at + key.size() + 3, nullptr);
+}
+
+MarkerSequence bundled_handstand(Eigen::Index frames) {
+  const MarkerSequence all = c3d::read_c3d(data_file("handstand.c3d"));
+  return all.frames(0, std::min(frames, all.frame_count()));
+}
+
+TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path out = empty_scratch("evaluate_short");
+  const CommandResult result =
+      run_command("evaluate --frames 60 --runs 2 --samples 93 --no-calibrate --quiet --out " + out.string());
+  ASSERT_EQ(result.status, 0) << result.output;
+  for (const char* name : {"marker_distance.csv", "occlusion_band.csv", "hidden_markers.csv", "runtime.csv",
+                           "joint_error.csv", "samples.csv", "summary.json"})
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  const std::string summary = read_text(out / "summary.json");
+  if (summary.find("\"figure_problems\": []") != std::string::npos)
+    for (const char* name :
+         {"fig3_marker_distance", "fig4_runtime", "fig7_hidden_markers", "joint_error", "samples"}) {
+      EXPECT_GT(fs::file_size(out / (std::string(name) + ".png")), 1000u) << name;
+      EXPECT_GT(fs::file_size(out / (std::string(name) + ".svg")), 1000u) << name;
+    }
+  // 60 frames: a header and 60 rows per series.
+  const std::string distance = read_text(out / "marker_distance.csv");
+  EXPECT_EQ(std::count(distance.begin(), distance.end(), '\n'), 61);
+  EXPECT_EQ(distance.substr(0, distance.find('\n')), "frame,time,s2kf_mm,baseline_mm");
+  const std::string hidden = read_text(out / "hidden_markers.csv");
+  EXPECT_EQ(hidden.substr(0, hidden.find('\n')), "frame,time,run1,run2,mean");
+
+  // The numbers are the library's for the same input.
+  const MarkerSequence recording = bundled_handstand(60);
+  const track::Session setup = evaluation_session(recording);
+  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
+  const track::MethodResult s2kf =
+      track::evaluate_method(setup, recording, track::Method::s2kf, 93, &truth, 20);
+  const track::MethodResult baseline =
+      track::evaluate_method(setup, recording, track::Method::baseline, 0, &truth, 20);
+  EXPECT_NEAR(json_number(summary, "mean_marker_distance_mm", "s2kf"), s2kf.level_mm, 1e-9 * s2kf.level_mm);
+  EXPECT_NEAR(json_number(summary, "mean_marker_distance_mm", "baseline"), baseline.level_mm,
+              1e-9 * baseline.level_mm);
+  EXPECT_NEAR(json_number(summary, "segment_orientation_rms_deg", "s2kf"),
+              s2kf.truth->segment_orientation_rms_deg, 1e-9);
+  EXPECT_EQ(json_number(summary, "frames"), 60);
+  EXPECT_EQ(json_number(summary, "runs"), 2);
+  // Prepared as s2kf track prepares it: the bundled set chosen by the labels, not calibrated here.
+  EXPECT_NE(summary.find("\"marker_set\": \"kit\""), std::string::npos);
+  EXPECT_NE(summary.find("\"calibrated\": false"), std::string::npos);
+}
+
+TEST(EvaluateCommand, BadInputGivesASentenceAndExitStatusOne) {
+  const fs::path dir = empty_scratch("evaluate_bad");
+  auto expect_failure = [&](const std::string& arguments, const std::string& phrase) {
+    const CommandResult result =
+        run_command("evaluate " + arguments + " --quiet --out " + (dir / "out").string());
+    EXPECT_EQ(result.status, 1) << arguments << "\n" << result.output;
+    EXPECT_NE(result.output.find("s2kf: "), std::string::npos) << result.output;
+    EXPECT_NE(result.output.find(phrase), std::string::npos) << arguments << "\n" << result.output;
+  };
+  expect_failure((dir / "missing.c3d").string(), "no such file");
+  expect_failure("--samples 93,abc --frames 5", "'abc' is not one");
+  expect_failure("--samples 5 --frames 5", "'5' is not one");
+  expect_failure("--samples 93, --frames 5", "comma-separated");
+  // Truth with other columns, and truth with too few frames.
+  {
+    std::ofstream bad(dir / "columns.csv");
+    bad << "frame,time,root_x,root_y,root_z,root_roll,root_pitch,root_yaw,elbow\n0,0,0,0,0,0,0,0,0\n";
+  }
+  expect_failure(data_file("handstand.c3d") + " --frames 5 --truth " + (dir / "columns.csv").string(),
+                 "joint columns");
+  {
+    std::ifstream in(data_file("handstand_truth.csv"));
+    std::ofstream shortened(dir / "short.csv");
+    std::string line;
+    for (int i = 0; i < 11 && std::getline(in, line); ++i) shortened << line << "\n";
+  }
+  expect_failure(data_file("handstand.c3d") + " --frames 5 --truth " + (dir / "short.csv").string(),
+                 "has 10 frames");
+  // A simulated recording: the motion must exist and excludes a recording and its truth.
+  expect_failure("--motion no_such_motion --frames 5", "unknown motion 'no_such_motion'");
+  expect_failure(data_file("handstand.c3d") + " --motion walk --frames 5", "give no recording");
+  expect_failure("--motion walk --occlusion 2,10 --frames 5", "probability p must lie in [0, 1]");
+  expect_failure(data_file("handstand.c3d") + " --occlusion 0.005,100 --frames 5", "simulated --motion only");
+}
+
+// --motion simulates a realistic subject and reports the true-subject fit beside the S2KF; the
+// numbers are the library's for the same subject and recording.
+TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path out = empty_scratch("evaluate_motion");
+  const CommandResult result = run_command(
+      "evaluate --motion walk --subject-seed 2 --frames 80 --runs 1 --samples 93 --no-calibrate --smooth "
+      "--out " +
+      out.string());
+  ASSERT_EQ(result.status, 0) << result.output;
+  EXPECT_NE(result.output.find("(true-subject fit "), std::string::npos) << result.output;
+  const std::string summary = read_text(out / "summary.json");
+  // The library's reference on the same subject and recording.
+  const sim::SubjectOptions options;
+  const sim::Subject subject = sim::make_subject(body::mmm_body_model(options.height_mm), options, 2);
+  const cli::JointTable joints{subject.joint_names, subject.lower, subject.upper};
+  sim::RecordingOptions recording_options;
+  recording_options.frames = 80;
+  const sim::Recording recording = sim::simulate_recording(
+      cli::load_motion_file(data_file("motions/walk.json"), joints, 2), subject, recording_options, 2);
+  const track::TruthComparison expected =
+      track::compare_with_truth(subject.model, track::true_subject_fit(subject, recording),
+                                sim::truth_motion(recording, subject.joint_names), 20);
+  const double reference = json_number(summary, "segment_orientation_rms_deg", "true_subject_reference");
+  EXPECT_NEAR(reference, expected.segment_orientation_rms_deg, 1e-6);
+  EXPECT_GT(reference, 0.1);
+  EXPECT_LT(reference, json_number(summary, "segment_orientation_rms_deg", "s2kf"));  // it knows the subject
+  EXPECT_GT(json_number(summary, "segment_orientation_rms_deg", "s2kf_smoothed"), 0.1);
+  EXPECT_EQ(json_number(summary, "frames"), 80);
+}
+
+}  // namespace

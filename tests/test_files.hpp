@@ -1,0 +1,50 @@
+/// @file
+/// Files in tests: the bundled data, a scratch folder per test under the build tree, and reading
+/// back what a test wrote.
+#pragma once
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace s2kf::test_support {
+
+/// A file of the repository's data/ folder.
+inline std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
+
+/// A scratch folder `name` under the build tree, created if absent (earlier files stay).
+inline std::filesystem::path scratch(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::path(S2KF_TEST_TMP_DIR) / name;
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+/// A fresh, empty scratch folder `name`.
+inline std::filesystem::path empty_scratch(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::path(S2KF_TEST_TMP_DIR) / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+/// The whole text of a file ("" when it cannot be read).
+inline std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// The names of the entries of a folder, sorted.
+inline std::vector<std::string> file_names(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace s2kf::test_support

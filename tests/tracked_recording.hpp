@@ -1,0 +1,92 @@
+/// @file
+/// A recording tracked as `s2kf track` tracks it (height from rigid marker pairs, default options,
+/// no calibration), straight through the library: what the tracker tests check, and what the
+/// command's tests compare the program with.
+#pragma once
+
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/motion_files.hpp>
+#include <s2kf/track/height_estimate.hpp>
+#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/session.hpp>
+#include <s2kf/track/tracker.hpp>
+#include <s2kf/track/tracking_metrics.hpp>
+#include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/truth_metrics.hpp>
+
+#include "tracker_samples.hpp"
+
+#include <algorithm>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace s2kf::test_support {
+
+/// The frame source run_tracking takes: the recording's frames from the first up to `end`.
+inline std::function<bool(MarkerFrame&)> frames_of(const c3d::Recording& recording, Eigen::Index end) {
+  auto f = std::make_shared<Eigen::Index>(0);
+  return [&recording, end, f](MarkerFrame& frame) {
+    if (*f >= end) return false;
+    frame.index = *f;
+    frame.positions = recording.frame(*f);
+    frame.visible = recording.visible.col(*f);
+    ++*f;
+    return true;
+  };
+}
+
+inline std::vector<std::string> labels_of(const c3d::Recording& recording) {
+  std::vector<std::string> labels;
+  for (const auto& label : recording.info.labels) labels.push_back(label.name);
+  return labels;
+}
+
+struct Tracked {
+  body::BodyModel model;  // scaled to the estimated height
+  track::TrackingRun run;
+  track::TruthComparison truth;
+  long converged = 0;
+  double level_mm = 0;  // mean marker distance after convergence
+  double height_mm = 0;
+};
+
+// Tracks `recording` (optionally only its first `frames`) as `s2kf track` does: height from rigid
+// marker pairs, default options.
+inline Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& truth,
+                               Eigen::Index frames = 0, track::TrackerOptions options = {}) {
+  body::BodyModel model = body::mmm_body_model(1000);
+  const track::MarkerMapping mapping = track::map_markers(labels_of(recording), model.marker_names());
+  track::HeightEstimator heights(model, mapping);
+  // As `s2kf track` does: up to 200 frames spread evenly through the recording.
+  const Eigen::Index step = std::max<Eigen::Index>(1, recording.frame_count() / 200);
+  for (Eigen::Index f = 0; f < recording.frame_count(); f += step)
+    heights.add_frame(recording.frame(f), recording.visible.col(f));
+  Tracked result;
+  result.height_mm = heights.height_mm().value_or(1750);
+  model = model.scaled(result.height_mm);
+  result.model = model;
+  track::Tracker tracker(model, mapping, options, recording.info.rate, test::tracker_samples(options));
+  const Eigen::Index end = frames > 0 ? std::min(frames, recording.frame_count()) : recording.frame_count();
+  auto next = frames_of(recording, end);
+  result.run = track::run_tracking(tracker, next, recording.info.rate, model.joint_names(), true);
+  result.converged =
+      track::converged_frame(result.run.mean_marker_distance, track::frames_per_second(recording.info.rate));
+  result.level_mm = track::mean_from(result.run.mean_marker_distance, result.converged);
+  result.truth = track::compare_with_truth(model, result.run.motion, truth, 10);
+  return result;
+}
+
+/// The session the evaluation's tests use: the model's own markers, the height given or estimated,
+/// no calibration (they compare the methods on the model as it is).
+inline track::Session evaluation_session(const MarkerSequence& recording, double height_mm = 0) {
+  SequenceFrameSource source(recording);
+  track::SessionOptions options;
+  options.height_mm = height_mm;
+  options.calibrate = false;
+  return track::prepare_session(source, body::model_marker_set(body::mmm_body_model(1000)), options,
+                                test::tracker_samples());
+}
+
+}  // namespace s2kf::test_support
