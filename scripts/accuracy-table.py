@@ -4,7 +4,11 @@
 beside the true-subject reference. Prints a Markdown table and the means over the runs.
 
     scripts/accuracy-table.py [--s2kf build/s2kf] [--motions walk,...] [--seeds 1,2,3] [--out DIR]
-                              [--occlusion none,paper] [--extra=--no-calibrate]
+                              [--occlusion none,paper] [--extra=--no-calibrate] [--raw FILE] [--reuse]
+
+--raw writes every case's accuracy figures (filter, smoothed, reference, latency, marker distance,
+per segment) to one JSON file; --reuse reads a case's summary.json from --out when it is there
+instead of running it again.
 """
 import argparse
 import json
@@ -19,10 +23,13 @@ parser.add_argument("--seeds", default="1,2,3")
 parser.add_argument("--out", default="results/accuracy")
 parser.add_argument("--occlusion", default="none,paper", help="none, paper or both (none,paper)")
 parser.add_argument("--extra", default="", help="more options for s2kf evaluate, space-separated")
+parser.add_argument("--raw", default="", help="write every case's figures to this JSON file")
+parser.add_argument("--reuse", action="store_true", help="read existing summaries instead of running")
 args = parser.parse_args()
 
 PAPER_OCCLUSION = "0.005,100"
 rows = []
+raw = []
 modes = [mode == "paper" for mode in args.occlusion.split(",")]
 for occluded in modes:
     for motion in args.motions.split(","):
@@ -32,11 +39,20 @@ for occluded in modes:
                        "--samples", "301", "--smooth", "--quiet", "--out", out] + args.extra.split()
             if occluded:
                 command += ["--occlusion", PAPER_OCCLUSION]
-            result = subprocess.run(command, capture_output=True, text=True)
-            if result.returncode != 0:
-                sys.exit(" ".join(command) + " failed: " + result.stderr.strip())
+            if not (args.reuse and os.path.exists(os.path.join(out, "summary.json"))):
+                result = subprocess.run(command, capture_output=True, text=True)
+                if result.returncode != 0:
+                    sys.exit(" ".join(command) + " failed: " + result.stderr.strip())
             with open(os.path.join(out, "summary.json")) as f:
                 summary = json.load(f)
+            raw.append({"motion": motion, "seed": int(seed), "occlusion": PAPER_OCCLUSION if occluded else None,
+                        "command": " ".join(command), "machine": summary["machine"],
+                        "calibrated": summary["calibrated"],
+                        "s2kf": {k: summary["s2kf"][k] for k in ("truth", "latency_ms", "mean_marker_distance_mm")},
+                        "s2kf_smoothed": summary["s2kf_smoothed"],
+                        "true_subject_reference": summary["true_subject_reference"]})
+            if "error_by_time_hidden" in summary:
+                raw[-1]["error_by_time_hidden"] = summary["error_by_time_hidden"]
             rows.append((occluded, motion, seed, summary["s2kf"]["truth"], summary["s2kf_smoothed"],
                          summary["true_subject_reference"]))
 
@@ -52,3 +68,7 @@ for occluded in modes:
     chosen = [r for r in rows if r[0] == occluded]
     means = [" / ".join(f"{sum(r[i][k] for r in chosen) / len(chosen):.2f}" for i in (3, 4, 5)) for k in keys]
     print(f"| {'paper' if occluded else 'none'} | **mean** | | " + " | ".join(means) + " | |")
+if args.raw:
+    with open(args.raw, "w") as f:
+        json.dump(raw, f, indent=1)
+        f.write("\n")

@@ -9,7 +9,8 @@
 // Usage: accuracy-tune MOTION SEED OCCLUSION(0|1) SMOOTH(0|1) CALIBRATE(0|1) rw|cv
 //          [POSITION_ACC ORIENTATION_ACC JOINT_ACC POSITION_SPEED ORIENTATION_SPEED JOINT_SPEED
 //           REFERENCE(0|1) [INITIAL_RATE_SDS x3]]
-// Environment: OFFSET_SD, SCALE_SD (calibration priors), NOSCALE (offsets only), SEGMENTS (per segment).
+// Environment: OFFSET_SD, SCALE_SD (calibration priors), NOSCALE (offsets only), PRIOR_ONLY (the
+// calibration's prior_only_fraction), SEGMENTS (per segment), DIRECTIONS (the directions left to the prior).
 #include <cstdio>
 #include <cstdlib>
 #include <s2kf/body/marker_set.hpp>
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
   if (const char* v = std::getenv("OFFSET_SD")) opt.calibration.offset_prior_sd_mm = std::atof(v);
   if (const char* v = std::getenv("SCALE_SD")) opt.calibration.scale_prior_sd_per_frame = std::atof(v);
   if (const char* v = std::getenv("NOSCALE")) opt.calibration.estimate_segment_scales = false;
+  if (const char* v = std::getenv("PRIOR_ONLY")) opt.calibration.prior_only_fraction = std::atof(v);
   std::string model = argv[6];
   opt.tracker.motion_model =
       model == "cv" ? track::MotionModel::constant_velocity : track::MotionModel::random_walk;
@@ -80,6 +82,13 @@ int main(int argc, char** argv) {
                 r.root_orientation_rms_deg);
   }
   std::printf("\n");
+  if (std::getenv("DIRECTIONS") && session.calibration)
+    for (const auto& pass : session.calibration->passes) {
+      std::printf(" %d unknowns, %zu left to the prior:", pass.subject_unknowns, pass.prior_only.size());
+      for (const auto& d : pass.prior_only)
+        std::printf(" %s %.2g (%.0f%%)", d.segment.c_str(), d.information_ratio, 100 * d.share);
+      std::printf("\n");
+    }
   if (std::getenv("SEGMENTS")) {
     for (const auto& [name, rms] : t.segment_rms_deg) std::printf(" %s %.1f", name.c_str(), rms);
     std::printf("\n");

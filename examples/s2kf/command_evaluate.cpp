@@ -16,6 +16,7 @@
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
 #include <s2kf/track/evaluation.hpp>
+#include <s2kf/track/hidden_time_error.hpp>
 #include <s2kf/track/true_subject_reference.hpp>
 
 #include <nlohmann/json.hpp>
@@ -88,6 +89,22 @@ std::string machine_name() {
       if (colon != std::string::npos) return line.substr(line.find_first_not_of(' ', colon + 1));
     }
   return "unknown";
+}
+
+json hidden_time_json(const track::HiddenTimeError& e) {
+  const auto bins = [](const std::vector<track::HiddenTimeBin>& b) {
+    json out = json::array();
+    for (const track::HiddenTimeBin& bin : b)
+      out.push_back({{"hidden_from_s", bin.lower_s},
+                     {"hidden_to_s", std::isfinite(bin.upper_s) ? json(bin.upper_s) : json(nullptr)},
+                     {"frames", bin.frames},
+                     {"rms_deg", number_or_null(bin.rms_deg)}});
+    return out;
+  };
+  json segments = json::object();
+  for (const track::SegmentHiddenTimeError& s : e.segments)
+    segments[s.segment] = {{"markers", s.markers}, {"bins", bins(s.bins)}};
+  return {{"all_segments", bins(e.all)}, {"segments", segments}};
 }
 
 json result_json(const track::MethodResult& r) {
@@ -236,6 +253,14 @@ void run_evaluate(const EvaluateSettings& settings) {
 
   // The reachable reference (simulated input only) and the smoothed S2KF, against the truth.
   std::optional<track::TruthComparison> reference, smoothed;
+  // How the segments' error grows with the time their markers have been hidden (the input's own
+  // occlusion; everything lands in the first bin without it).
+  json error_by_time_hidden = nullptr;
+  const auto hidden_time = [&](const io::MotionTable& motion) {
+    return hidden_time_json(track::hidden_time_error(setup.model, motion, *truth, complete.visible,
+                                                     setup.mapping, setup.rate_hz, settings.warmup));
+  };
+  if (truth) error_by_time_hidden = {{"s2kf", hidden_time(s2kf.run.motion)}};
   if (simulated) {
     reference = track::compare_with_truth(setup.model,
                                           track::true_subject_fit(simulated->subject, simulated->recording),
@@ -249,6 +274,7 @@ void run_evaluate(const EvaluateSettings& settings) {
     const track::TrackingRun run =
         track::run_session(setup, source, cached_sample_set(46, setup.tracker.samples), run_options);
     smoothed = track::compare_with_truth(setup.model, run.motion, *truth, settings.warmup);
+    error_by_time_hidden["s2kf_smoothed"] = hidden_time(run.motion);
     say("smoothed S2KF: segment orientation RMS " + cell(smoothed->segment_orientation_rms_deg) + " deg");
   }
 
@@ -329,6 +355,7 @@ void run_evaluate(const EvaluateSettings& settings) {
                   {"sample_sweep", sweep_json},
                   {"true_subject_reference", reference ? truth_json(*reference) : json(nullptr)},
                   {"s2kf_smoothed", smoothed ? truth_json(*smoothed) : json(nullptr)},
+                  {"error_by_time_hidden", error_by_time_hidden},
                   {"files", written},
                   {"figure_problems", figure_problems},
                   {"seconds", elapsed()}};

@@ -19,6 +19,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -53,6 +54,17 @@ struct CalibrationOptions {
   /// an SD of 0.4 / sqrt(n) (2.3 % at 300 frames): it decides the lengths no marker observes, such
   /// as the upper neck's, and barely touches the well observed ones, whose data grow as fast.
   double scale_prior_sd_per_frame = 0.4;
+  /// Directions of the subject unknowns that the data cannot tell from the poses are left to the
+  /// prior alone: a direction whose data information (the subject block of the bundle adjustment's
+  /// reduced normal matrix, the poses eliminated) is below `prior_only_fraction` of the information
+  /// of one marker coordinate seen in every frame used is not moved from the marker set. These are
+  /// the gauge directions (all markers of an end segment turned about its joint's axes, which a
+  /// constant joint-angle offset undoes; a bone length against the markers beyond it) and the
+  /// directions close to them, which soft tissue would otherwise decide. 0 (default): every
+  /// direction is estimated, the priors weighing in as usual. 0.3 made the segments of simulated
+  /// subjects better on some motions and worse on others (docs/tracking.md, "Gauge-aware subject
+  /// calibration"), so it is not the default.
+  double prior_only_fraction = 0;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
   int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
   /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
@@ -75,6 +87,8 @@ struct CalibrationOptions {
       throw std::invalid_argument("calibration: the offset prior SD must be positive");
     if (!(scale_prior_sd_per_frame > 0))
       throw std::invalid_argument("calibration: the scale prior SD must be positive");
+    if (!(prior_only_fraction >= 0 && prior_only_fraction < 1))
+      throw std::invalid_argument("calibration: the prior-only fraction must lie in [0, 1)");
     if (skip_frames < 0 || stride < 1)
       throw std::invalid_argument("calibration: skip_frames >= 0 and stride >= 1");
   }
@@ -90,6 +104,16 @@ struct CalibrationPass {
   /// RMS marker distance (mm) over the adjusted frames' inlier residuals, before and after the
   /// bundle adjustment.
   double rms_before_mm = 0, rms_after_mm = 0;
+  /// The subject directions left to the prior (CalibrationOptions::prior_only_fraction), each with
+  /// the ratio of its data information to the prior's and where it lies: the segment (frame name)
+  /// whose markers and bone carry most of it, and that share.
+  struct PriorOnlyDirection {
+    double information_ratio = 0;
+    std::string segment;
+    double share = 0;
+  };
+  std::vector<PriorOnlyDirection> prior_only;
+  int subject_unknowns = 0;  ///< bone-length factors and marker offsets adjusted (before the above)
 };
 
 struct SubjectCalibration {
@@ -185,7 +209,11 @@ class BundleAdjustment {
  public:
   BundleAdjustment(const body::BodyModel& start, const MarkerMapping& mapping,
                    const MarkerSequence& recording, const CalibrationOptions& options, double noise_variance)
-      : start_(start), mapping_(mapping), recording_(recording), options_(options) {
+      : start_(start),
+        mapping_(mapping),
+        recording_(recording),
+        options_(options),
+        noise_variance_(noise_variance) {
     segments_ = options.estimate_segment_scales ? scalable_segments(start) : std::vector<std::string>{};
     cumulative_.assign(segments_.size(), 1.0);
     for (int m = 0; m < start.marker_count(); ++m)
@@ -229,10 +257,12 @@ class BundleAdjustment {
     pass.rms_before_mm = rms(model, frames);
     double current = before, damping = 1e-4;
     NormalEquations normal;
+    pass.subject_unknowns = unknowns_;
     for (int it = 0; it < options_.bundle_iterations; ++it) {
       ++pass.bundle_iterations;
       bool accepted = false;
       linearise_all(model, frames, normal);
+      if (it == 0) choose_estimated_directions(model, normal, frames.size(), pass);
       for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
         body::BodyModel trial_model = model;
         std::vector<BundleFrame> trial_frames = frames;
@@ -374,6 +404,62 @@ class BundleAdjustment {
       linearise(model, frames[k], normal.A[k], normal.B[k], normal.g[k], normal.C, normal.h);
   }
 
+  /// The subject's information from the data alone: the reduced normal matrix of the bundle
+  /// adjustment without priors or damping (the poses eliminated frame by frame), full.
+  Eigen::MatrixXd data_information(const NormalEquations& normal) const {
+    Eigen::MatrixXd information = normal.C, A, X;
+    for (std::size_t k = 0; k < normal.A.size(); ++k) {
+      A = normal.A[k];
+      damp(A, 0);  // the floor alone: directions no marker sees stay solvable
+      const Eigen::LLT<Eigen::MatrixXd> factor(A);
+      X = factor.matrixL().solve(normal.B[k]);
+      information.noalias() -= X.transpose() * X;
+    }
+    return information;
+  }
+
+  /// Sets `estimated_`, the basis of the subject directions the bundle adjustment moves: in the
+  /// prior's metric (unknowns scaled by their prior SDs), the eigenvectors of the data information
+  /// whose eigenvalue (information from the data over the prior's) reaches prior_only_fraction of
+  /// a marker coordinate's seen in all `frames`. The others keep the marker set's values; they are
+  /// listed in `pass`.
+  void choose_estimated_directions(const body::BodyModel& model, const NormalEquations& normal,
+                                   std::size_t frames, CalibrationPass& pass) {
+    estimated_.resize(0, 0);
+    if (options_.prior_only_fraction <= 0) return;
+    const double threshold = options_.prior_only_fraction * static_cast<double>(frames) *
+                             options_.offset_prior_sd_mm * options_.offset_prior_sd_mm / noise_variance_;
+    Eigen::VectorXd prior_sd(unknowns_);
+    for (int s = 0; s < scales_; ++s) prior_sd(s) = 1.0 / std::sqrt(scale_weight_);
+    for (std::size_t u = 0; u < used_.size(); ++u)
+      prior_sd.segment<3>(scales_ + 3 * static_cast<int>(u)).setConstant(1.0 / std::sqrt(offset_prior_[u]));
+    const Eigen::MatrixXd whitened = prior_sd.asDiagonal() * data_information(normal) * prior_sd.asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(whitened);
+    if (eigen.info() != Eigen::Success) return;  // estimate every direction, as without the option
+    std::vector<Eigen::Index> kept;
+    for (Eigen::Index i = 0; i < unknowns_; ++i) {
+      const double ratio = eigen.eigenvalues()(i);
+      if (ratio >= threshold) {
+        kept.push_back(i);
+        continue;
+      }
+      // Where it lies: shares of the unit eigenvector by segment.
+      std::map<std::string, double> share;
+      for (int s = 0; s < scales_; ++s)
+        share[segments_[static_cast<std::size_t>(s)]] += std::pow(eigen.eigenvectors()(s, i), 2);
+      for (std::size_t u = 0; u < used_.size(); ++u)
+        share[body::segment_of_frame(model, model.markers[static_cast<std::size_t>(used_[u])].frame)] +=
+            eigen.eigenvectors().col(i).segment<3>(scales_ + 3 * static_cast<int>(u)).squaredNorm();
+      const auto largest = std::max_element(share.begin(), share.end(),
+                                            [](const auto& a, const auto& b) { return a.second < b.second; });
+      pass.prior_only.push_back({ratio, largest->first, largest->second});
+    }
+    estimated_.resize(unknowns_, static_cast<Eigen::Index>(kept.size()));
+    for (std::size_t c = 0; c < kept.size(); ++c)
+      estimated_.col(static_cast<Eigen::Index>(c)) =
+          prior_sd.asDiagonal() * eigen.eigenvectors().col(kept[c]);
+  }
+
   /// A's Levenberg-Marquardt damping: relative to its diagonal, with a floor that keeps the
   /// directions no marker sees (exactly redundant spine and neck pairs, joints of hidden
   /// segments) solvable without moving them.
@@ -418,9 +504,19 @@ class BundleAdjustment {
     damp(C, damping);
     reduced.triangularView<Eigen::Lower>() += C;
     reduced_rhs += h;
-    const Eigen::LDLT<Eigen::MatrixXd> reduced_factor(reduced);  // reads the lower triangle
-    const Eigen::VectorXd subject_step = reduced_factor.solve(reduced_rhs);
-    if (reduced_factor.info() != Eigen::Success || !subject_step.allFinite()) return false;
+    Eigen::VectorXd subject_step;
+    if (estimated_.size() == 0) {
+      const Eigen::LDLT<Eigen::MatrixXd> reduced_factor(reduced);  // reads the lower triangle
+      subject_step = reduced_factor.solve(reduced_rhs);
+      if (reduced_factor.info() != Eigen::Success) return false;
+    } else {  // the step restricted to the estimated directions: subject_step = E y
+      const Eigen::MatrixXd restricted =
+          estimated_.transpose() * reduced.selfadjointView<Eigen::Lower>() * estimated_;
+      const Eigen::LDLT<Eigen::MatrixXd> restricted_factor(restricted);
+      subject_step = estimated_ * restricted_factor.solve(estimated_.transpose() * reduced_rhs);
+      if (restricted_factor.info() != Eigen::Success) return false;
+    }
+    if (!subject_step.allFinite()) return false;
 
     // Back-substitution: each frame's pose step given the subject step.
     for (std::size_t k = 0; k < trial_frames.size(); ++k) {
@@ -457,6 +553,8 @@ class BundleAdjustment {
   std::vector<int> used_;
   std::vector<int> joint_scale_;
   std::vector<double> weight_, offset_prior_;
+  double noise_variance_ = 1;
+  Eigen::MatrixXd estimated_;  ///< basis of the subject directions adjusted; empty: all of them
   int scales_ = 0, unknowns_ = 0;
   double scale_weight_ = 0;
 };

@@ -1,0 +1,171 @@
+// The subject calibration judged by the joints against the truth: the gauge directions the
+// bundle adjustment finds from the model, and the target (calibration never makes the
+// segments or the limb flexion worse than no calibration) on the bundled synthetic recordings
+// (data/*.c3d with data/*_truth.csv) and simulated realistic subjects, tracked as `s2kf track`
+// tracks them. The target is not met yet, by the default calibration nor by the gauge-aware one,
+// so those tests are disabled; they print both.
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_set.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/io/motion_files.hpp>
+#include <s2kf/sim/random_sweep.hpp>
+#include <s2kf/sim/recording.hpp>
+#include <s2kf/sim/subject.hpp>
+#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/session.hpp>
+#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/track/tracking_run.hpp>
+#include <s2kf/track/truth_metrics.hpp>
+
+#include "tracker_samples.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <map>
+#include <string>
+
+namespace {
+
+using namespace s2kf;
+
+/// Tracks `recording` as `s2kf track` does with the model's own marker set (the KIT markers all
+/// these recordings carry), calibrated or not, and compares the motion with the truth after 20
+/// frames.
+track::TruthComparison track_against_truth(const MarkerSequence& recording, const io::MotionTable& truth,
+                                           bool calibrate, double prior_only_fraction) {
+  track::SessionOptions options;
+  options.calibrate = calibrate;
+  options.calibration.prior_only_fraction = prior_only_fraction;
+  const SampleSet& samples = test::tracker_samples(options.tracker);
+  SequenceFrameSource source(recording);
+  const track::Session session =
+      track::prepare_session(source, body::model_marker_set(body::mmm_body_model(1000)), options, samples);
+  SequenceFrameSource again(recording);
+  const track::TrackingRun run = track::run_session(session, again, samples, {});
+  return track::compare_with_truth(session.model, run.motion, truth, 20);
+}
+
+/// No calibration, the default calibration, and the gauge-aware one (prior_only_fraction 0.3).
+struct Verdict {
+  track::TruthComparison plain, calibrated, gauge_aware;
+};
+
+Verdict compare(const std::string& name, const MarkerSequence& recording, const io::MotionTable& truth) {
+  Verdict v{track_against_truth(recording, truth, false, 0),
+            track_against_truth(recording, truth, true, track::CalibrationOptions{}.prior_only_fraction),
+            track_against_truth(recording, truth, true, 0.3)};
+  std::printf(
+      "%s: segments %.2f / %.2f / %.2f deg, limb flexion %.2f / %.2f / %.2f deg (no calibration / "
+      "calibrated / gauge-aware)\n",
+      name.c_str(), v.plain.segment_orientation_rms_deg, v.calibrated.segment_orientation_rms_deg,
+      v.gauge_aware.segment_orientation_rms_deg, v.plain.limb_flexion_rms_deg,
+      v.calibrated.limb_flexion_rms_deg, v.gauge_aware.limb_flexion_rms_deg);
+  return v;
+}
+
+// Calibration is judged to be no worse when it stays within this of no calibration (the runs are
+// deterministic; the margin keeps the test from failing on a change of rounding).
+constexpr double kMarginDeg = 0.05;
+
+// The target: calibrating never makes the segments or the limb flexion worse than no
+// calibration.
+void expect_not_worse_than_no_calibration(const Verdict& v) {
+  EXPECT_LE(v.calibrated.segment_orientation_rms_deg, v.plain.segment_orientation_rms_deg + kMarginDeg);
+  EXPECT_LE(v.calibrated.limb_flexion_rms_deg, v.plain.limb_flexion_rms_deg + kMarginDeg);
+  EXPECT_EQ(v.calibrated.joint_limit_violations, 0);
+}
+
+Verdict compare_bundled(const std::string& name) {
+  const std::string base = std::string(S2KF_DATA_DIR) + "/" + name;
+  const MarkerSequence recording = c3d::read_c3d(base + ".c3d");
+  return compare(name, recording, io::load_motion_csv(base + "_truth.csv"));
+}
+
+class BundledRecording : public ::testing::TestWithParam<const char*> {};
+
+// Not met yet (docs/tracking.md, "Gauge-aware subject calibration"): run with
+// --gtest_also_run_disabled_tests.
+TEST_P(BundledRecording, DISABLED_CalibrationNeverMakesTheJointsWorse) {
+  expect_not_worse_than_no_calibration(compare_bundled(GetParam()));
+}
+
+INSTANTIATE_TEST_SUITE_P(CalibrationAccuracy, BundledRecording,
+                         ::testing::Values("walk", "cartwheel", "handstand", "handstand_occluded"));
+
+/// A simulated realistic subject (the simulator's defaults: 8 mm placement SD fixed on the
+/// segments, 3 % bone lengths, 8 mm pose-dependent soft tissue) moving through a random sweep of
+/// its joints.
+struct Simulated {
+  sim::Recording recording;
+  io::MotionTable truth;
+};
+
+Simulated simulated(std::uint64_t seed) {
+  const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), sim::SubjectOptions{}, seed);
+  sim::RandomSweepOptions sweep;
+  sweep.duration_s = 8;
+  const sim::KeyframeMotion motion = sim::random_sweep_motion(seed, subject.lower, subject.upper, sweep);
+  sim::RecordingOptions options;
+  options.frame_rate = 100;
+  options.frames = 700;
+  Simulated s{sim::simulate_recording(motion, subject, options, seed), {}};
+  s.truth = sim::truth_motion(s.recording, body::mmm_body_model(1750).joint_names());
+  return s;
+}
+
+// The gauge directions found from the model: on a subject without soft tissue, the directions
+// whose data information is below 1e-5 of a marker coordinate's seen in every frame (below 1e-3
+// of the prior's) are exactly the ones the kinematics cannot see: each foot's markers turned about
+// the 3-DoF ankle (3 each), the head's about the 3-DoF neck (3) and each hand's about the wrist's
+// free axis (1 each), 11 in all.
+TEST(CalibrationAccuracy, FindsTheGaugeDirectionsOfTheModel) {
+  const sim::Subject subject = sim::make_subject(
+      body::mmm_body_model(1750),
+      [] {
+        sim::SubjectOptions o;
+        o.soft_tissue_mm = 0;
+        return o;
+      }(),
+      7);
+  sim::RandomSweepOptions sweep;
+  sweep.duration_s = 5;
+  const sim::KeyframeMotion motion = sim::random_sweep_motion(7, subject.lower, subject.upper, sweep);
+  sim::RecordingOptions recording_options;
+  recording_options.frame_rate = 100;
+  recording_options.frames = 400;
+  const sim::Recording recording = sim::simulate_recording(motion, subject, recording_options, 7);
+  const body::BodyModel model = body::mmm_body_model(1750);
+  track::TrackerOptions tracker;
+  tracker.samples = 101;
+  track::CalibrationOptions options;
+  options.final_pass = false;
+  options.prior_only_fraction = 1e-5;
+  const track::SubjectCalibration calibration =
+      track::calibrate_subject(model, track::map_markers(recording.labels, model.marker_names()), tracker,
+                               recording, test::tracker_samples(tracker), options);
+  std::map<std::string, int> count;
+  for (const auto& d : calibration.passes.front().prior_only) {
+    std::printf("prior only: %s, information ratio %.2g, share %.0f %%\n", d.segment.c_str(),
+                d.information_ratio, 100 * d.share);
+    ++count[d.segment];
+  }
+  EXPECT_EQ(count["LA"], 3);
+  EXPECT_EQ(count["RA"], 3);
+  EXPECT_EQ(count["BUN"], 3);
+  EXPECT_EQ(count["LW"], 1);
+  EXPECT_EQ(count["RW"], 1);
+  EXPECT_EQ(calibration.passes.front().prior_only.size(), 11u);
+}
+
+// Not met yet, as above.
+TEST(CalibrationAccuracy, DISABLED_NeverWorseOnSimulatedSubjects) {
+  for (std::uint64_t seed : {3, 5}) {
+    const Simulated s = simulated(seed);
+    expect_not_worse_than_no_calibration(
+        compare("simulated seed " + std::to_string(seed), s.recording, s.truth));
+  }
+}
+
+}  // namespace
