@@ -42,7 +42,9 @@ const RegisterCommand markerset_registration{
       CLI::App* infer = app.add_subcommand(
           "infer", "Infer which segment each marker rides on, and where, from the recording's motion");
       auto settings = std::make_shared<InferSettings>();
-      infer->add_option("recording", settings->input, "C3D recording (the subject standing in its first frames)")
+      infer
+          ->add_option("recording", settings->input,
+                       "C3D recording (the subject standing in its first frames)")
           ->required();
       infer->add_option("--out", settings->out, "marker-set file to write (JSON)")->required();
       infer->add_option("--up", settings->up, "the recording's vertical axis: x, y, z or auto (default)")

@@ -49,9 +49,8 @@ inline track::InferredMarkerSet infer_marker_set_file(const std::string& input, 
   inferred.set.name = std::filesystem::path(out).stem().string();
   if (std::filesystem::path(out).has_parent_path())
     std::filesystem::create_directories(std::filesystem::path(out).parent_path());
-  io::write_file_atomically(out, [&](std::ostream& stream) {
-    stream << marker_set_to_json(inferred.set).dump(2) << "\n";
-  });
+  io::write_file_atomically(
+      out, [&](std::ostream& stream) { stream << marker_set_to_json(inferred.set).dump(2) << "\n"; });
   return inferred;
 }
 
@@ -66,7 +65,8 @@ inline bool bundled_set_fits(const std::vector<std::string>& labels, const body:
 
 /// choose_marker_set_for, and when neither option names a set and no bundled set fits the labels,
 /// a set inferred from the recording itself, written to `inferred_path`; the choice's source says so.
-inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input, const std::vector<std::string>& labels,
+inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
+                                                  const std::vector<std::string>& labels,
                                                   const std::string& markerset, const std::string& subject,
                                                   const std::string& inferred_path) {
   if (!markerset.empty() || !subject.empty()) return choose_marker_set_for(labels, markerset, subject);
@@ -78,10 +78,14 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input, cons
   const track::InferredMarkerSet inferred = infer_marker_set_file(input, inferred_path, -1);
   MarkerSetChoice choice;
   choice.set = inferred.set;
-  choice.source = "inferred from the recording, as no bundled set names enough of its labels (best: " +
-                  (best < 0 ? std::string("none") : sets[static_cast<std::size_t>(best)].name + " with " +
-                   std::to_string(track::map_marker_set(labels, sets[static_cast<std::size_t>(best)]).markers_used())) +
-                  "); written to " + inferred_path + "; " + inferred.notes.front() + "; confidence per segment:";
+  choice.source =
+      "inferred from the recording, as no bundled set names enough of its labels (best: " +
+      (best < 0
+           ? std::string("none")
+           : sets[static_cast<std::size_t>(best)].name + " with " +
+                 std::to_string(
+                     track::map_marker_set(labels, sets[static_cast<std::size_t>(best)]).markers_used())) +
+      "); written to " + inferred_path + "; " + inferred.notes.front() + "; confidence per segment:";
   for (const track::InferredSegment& s : inferred.segments)
     choice.source += " " + s.segment + " " + std::to_string(std::lround(100 * s.confidence)) + " %";
   return choice;

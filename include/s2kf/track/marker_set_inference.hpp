@@ -36,6 +36,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -60,7 +61,11 @@ struct MarkerSetInferenceOptions {
   /// A marker moves to another frame only where its spread is below this fraction of its spread
   /// on its current frame: a segment that barely moves against its neighbour in the recording
   /// (the lumbar spine against the pelvis in a walk) leaves its markers where the template put them.
-  double move_ratio = 0.8;
+  double move_ratio = 0.6;
+  /// A marker whose spread on its frame stays below this rides on it well enough and stays: where a
+  /// joint hardly moved in the recording (a wrist held straight), the neighbour fits as well and
+  /// only the template can tell them apart. 15 mm: twice the simulated subjects' soft tissue.
+  double rigid_spread_mm = 15.0;
   /// Known marker sets whose markers (besides the base model's own) describe the body surface for
   /// the template fit.
   std::vector<body::MarkerSet> known_sets;
@@ -128,7 +133,7 @@ inline Eigen::Matrix3d lab_from_model(int up, double heading) {
 /// Per point and model frame: the RMS spread (mm) of the point's position in that frame over the
 /// tracked frames, and its mean position there.
 struct FrameSpread {
-  Eigen::MatrixXd spread;                       ///< points x frames; infinity where never seen
+  Eigen::MatrixXd spread;                          ///< points x frames; infinity where never seen
   std::vector<std::vector<Eigen::Vector3d>> mean;  ///< [point][frame], mm at the tracked height
 };
 
@@ -147,9 +152,8 @@ inline FrameSpread track_and_measure(const MarkerSequence& recording, const std:
   const int frames = model.frame_count();
   const auto n = static_cast<Eigen::Index>(points.size());
   Eigen::MatrixXd count = Eigen::MatrixXd::Zero(n, frames), sum2 = count;
-  std::vector<std::vector<Eigen::Vector3d>> sum(points.size(),
-                                                std::vector<Eigen::Vector3d>(static_cast<std::size_t>(frames),
-                                                                             Eigen::Vector3d::Zero()));
+  std::vector<std::vector<Eigen::Vector3d>> sum(
+      points.size(), std::vector<Eigen::Vector3d>(static_cast<std::size_t>(frames), Eigen::Vector3d::Zero()));
   Tracker tracker(model, session.mapping, session.tracker, head.rate_hz, samples);
   MarkerFrame frame;
   long tracked = 0;
@@ -178,7 +182,8 @@ inline FrameSpread track_and_measure(const MarkerSequence& recording, const std:
   for (Eigen::Index i = 0; i < n; ++i)
     for (int k = 0; k < frames; ++k)
       if (count(i, k) >= 10) {
-        const Eigen::Vector3d mean = sum[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] / count(i, k);
+        const Eigen::Vector3d mean =
+            sum[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] / count(i, k);
         result.mean[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] = mean;
         result.spread(i, k) = std::sqrt(std::max(0.0, sum2(i, k) / count(i, k) - mean.squaredNorm()));
       }
@@ -205,8 +210,9 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
     points.push_back(static_cast<int>(p));
   }
   if (points.size() < 8)
-    throw std::invalid_argument("only " + std::to_string(points.size()) +
-                                " labelled points are ever seen; at least 8 are needed to infer a marker set");
+    throw std::invalid_argument(
+        "only " + std::to_string(points.size()) +
+        " labelled points are ever seen; at least 8 are needed to infer a marker set");
   if (recording.frame_count() < 2 * options.skip_frames + 10)
     throw std::invalid_argument("the recording has " + std::to_string(recording.frame_count()) +
                                 " frames; at least " + std::to_string(2 * options.skip_frames + 10) +
@@ -253,8 +259,8 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
   constexpr int kHeadings = 36;
   std::vector<Fit> best_by_heading(kHeadings);
   for (const double abduction : {0.0, 0.4, 0.8, 1.2, 1.57}) {
-    const body::FrameTransforms zero =
-        body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), detail::arms_out(base, abduction));
+    const body::FrameTransforms zero = body::joint_frames(
+        base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), detail::arms_out(base, abduction));
     Eigen::Matrix3Xd model(3, static_cast<Eigen::Index>(candidates.size()));
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       const auto k = static_cast<std::size_t>(candidates[c].frame);
@@ -293,61 +299,77 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
   }
   int best = 0;
   for (int h = 1; h < kHeadings; ++h)
-    if (best_by_heading[static_cast<std::size_t>(h)].cost < best_by_heading[static_cast<std::size_t>(best)].cost)
+    if (best_by_heading[static_cast<std::size_t>(h)].cost <
+        best_by_heading[static_cast<std::size_t>(best)].cost)
       best = h;
   const Fit& fit = best_by_heading[static_cast<std::size_t>(best)];
   double rival = std::numeric_limits<double>::infinity();
   for (int h = 0; h < kHeadings; ++h) {
     const int apart = std::min((h - best + kHeadings) % kHeadings, (best - h + kHeadings) % kHeadings);
-    if (apart * 360 / kHeadings > 60) rival = std::min(rival, best_by_heading[static_cast<std::size_t>(h)].cost);
+    if (apart * 360 / kHeadings > 60)
+      rival = std::min(rival, best_by_heading[static_cast<std::size_t>(h)].cost);
   }
   if (!(rival > options.heading_margin * fit.cost)) {
     std::ostringstream s;
     s << "the subject's facing direction in frame " << template_frame
       << " is ambiguous (the best fit of the body model is only " << std::lround(100 * (rival / fit.cost - 1))
-      << " % better than one facing " << "more than 60 degrees away); give a marker set (--markerset)";
+      << " % better than one facing "
+      << "more than 60 degrees away); give a marker set (--markerset)";
     throw std::invalid_argument(s.str());
   }
 
-  // The initial set: every marker on the frame of its nearest template point.
+  // The initial set: every marker on the frame of its nearest template point. A marker's offset on
+  // any frame is where the template pose puts it: the standing subject defines the zero of the
+  // joint angles, as the model's zero pose does (offsets measured from tracked frames would carry
+  // the first rounds' errors into the set).
+  const body::FrameTransforms template_frames = body::joint_frames(
+      base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), detail::arms_out(base, fit.abduction));
+  const Eigen::Matrix3d rotation = detail::lab_from_model(up, fit.heading);
+  std::vector<std::optional<Eigen::Vector3d>> standing(points.size());  // model coordinates, 1000 mm
+  std::vector<int> frame_of(points.size(), 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto at = std::find(shown.begin(), shown.end(), points[i]);
+    if (at == shown.end()) continue;
+    const auto column = at - shown.begin();
+    frame_of[i] = candidates[static_cast<std::size_t>(fit.nearest[static_cast<std::size_t>(column)])].frame;
+    standing[i] =
+        Eigen::Vector3d(rotation.transpose() * (lab.col(column) - fit.translation) * (1000.0 / fit.height));
+  }
   body::MarkerSet set;
   set.name = "inferred";
   set.reference_height_mm = 1000.0;
-  {
-    const body::FrameTransforms zero = body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(),
-                                                          detail::arms_out(base, fit.abduction));
-    const Eigen::Matrix3d rotation = detail::lab_from_model(up, fit.heading);
-    for (int p : points) {
-      body::MarkerSetEntry entry;
-      entry.label = recording.labels[static_cast<std::size_t>(p)];
-      const auto at = std::find(shown.begin(), shown.end(), p);
-      int frame = 0;
-      Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-      if (at != shown.end()) {
-        const auto i = static_cast<std::size_t>(at - shown.begin());
-        frame = candidates[static_cast<std::size_t>(fit.nearest[i])].frame;
-        const Eigen::Vector3d model_point =
-            rotation.transpose() * (lab.col(static_cast<Eigen::Index>(i)) - fit.translation) * (1000.0 / fit.height);
-        const auto k = static_cast<std::size_t>(frame);
-        offset = zero.rotations[k].transpose() * (model_point - zero.origins[k]);
-      }
-      entry.frame = body::marker_set_frame_name(base, frame);
-      entry.offset = offset;
-      set.entries.push_back(entry);
-    }
+  const auto place = [&](std::size_t i, const Eigen::Vector3d& fallback) {
+    const auto k = static_cast<std::size_t>(frame_of[i]);
+    set.entries[i].frame = body::marker_set_frame_name(base, frame_of[i]);
+    set.entries[i].offset = standing[i] ? Eigen::Vector3d(template_frames.rotations[k].transpose() *
+                                                          (*standing[i] - template_frames.origins[k]))
+                                        : fallback;
+  };
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    set.entries.emplace_back();
+    set.entries[i].label = recording.labels[static_cast<std::size_t>(points[i])];
+    place(i, Eigen::Vector3d::Zero());
   }
   std::ostringstream fitted;
-  fitted << "template fit in frame " << template_frame << ": " << "xyz"[up] << " up, height "
-         << std::lround(fit.height) << " mm, arms out " << std::lround(fit.abduction * 180 / kPi)
-         << " deg, facing " << std::lround(fit.heading * 180 / kPi) << " deg (the next direction more than 60 deg away costs "
+  fitted << "template fit in frame " << template_frame << ": "
+         << "xyz"[up] << " up, height " << std::lround(fit.height) << " mm, arms out "
+         << std::lround(fit.abduction * 180 / kPi) << " deg, facing " << std::lround(fit.heading * 180 / kPi)
+         << " deg (the next direction more than 60 deg away costs "
          << std::lround(100 * (rival / fit.cost - 1)) << " % more)";
   result.notes.push_back(fitted.str());
 
-  // Rounds of tracking and reassignment.
+  // Rounds of tracking and reassignment. A marker moves only to a neighbouring segment (its parent
+  // or a child): the template fit placed it near its segment, and a distant segment can look
+  // rigid with it only where the tracking of both failed.
+  std::map<std::string, std::string> parent_segment;
+  for (const body::Joint& joint : base.joints)
+    parent_segment.emplace(joint.group, body::segment_of_frame(base, joint.parent_frame));
+  const auto neighbours = [&](int a, int b) {
+    const std::string sa = body::segment_of_frame(base, a), sb = body::segment_of_frame(base, b);
+    return sa == sb || parent_segment[sa] == sb || parent_segment[sb] == sa;
+  };
   double height = fit.height;
   detail::FrameSpread spread;
-  std::vector<int> frame_of(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) frame_of[i] = base.frame_index(set.entries[i].frame);
   for (int round = 0; round < options.max_rounds; ++round) {
     double estimated = height;
     spread = detail::track_and_measure(recording, points, set, round == 0 ? height : 0.0, samples, options,
@@ -356,17 +378,19 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
     int moved = 0;
     for (std::size_t i = 0; i < points.size(); ++i) {
       const auto row = static_cast<Eigen::Index>(i);
-      Eigen::Index best_frame = 0;
-      const double best_spread = spread.spread.row(row).minCoeff(&best_frame);
+      int best_frame = frame_of[i];
+      double best_spread = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < base.frame_count(); ++k)
+        if (neighbours(frame_of[i], k) && spread.spread(row, k) < best_spread)
+          best_frame = k, best_spread = spread.spread(row, k);
       if (!std::isfinite(best_spread)) continue;
-      if (std::isfinite(spread.spread(row, frame_of[i])) &&
-          !(best_spread < options.move_ratio * spread.spread(row, frame_of[i])))
+      const double own = spread.spread(row, frame_of[i]);
+      if (std::isfinite(own) && (own < options.rigid_spread_mm || !(best_spread < options.move_ratio * own)))
         best_frame = frame_of[i];
-      if (static_cast<int>(best_frame) != frame_of[i]) ++moved;
-      frame_of[i] = static_cast<int>(best_frame);
-      body::MarkerSetEntry& entry = set.entries[i];
-      entry.frame = body::marker_set_frame_name(base, frame_of[i]);
-      entry.offset = spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / height);
+      if (best_frame == frame_of[i]) continue;
+      ++moved;
+      frame_of[i] = best_frame;
+      place(i, spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / height));
     }
     result.rounds = round + 1;
     if (moved == 0) break;
@@ -388,7 +412,7 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
     ++s.markers;
     const double o = std::isfinite(own) ? own : options.max_spread_mm * 10;
     s.spread_mm += o * o;
-    s.confidence += std::isfinite(other) && std::isfinite(own) ? 1.0 - own / other : 0.0;
+    s.confidence += std::isfinite(other) && std::isfinite(own) ? std::max(0.0, 1.0 - own / other) : 0.0;
     total2 += o * o;
   }
   result.spread_mm = std::sqrt(total2 / static_cast<double>(points.size()));
@@ -403,8 +427,8 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
   }
   if (!(result.spread_mm <= options.max_spread_mm)) {
     std::ostringstream s;
-    s << "the markers ride rigidly on no segment of the body model (RMS spread " << std::lround(result.spread_mm)
-      << " mm on their best segments after " << result.rounds
+    s << "the markers ride rigidly on no segment of the body model (RMS spread "
+      << std::lround(result.spread_mm) << " mm on their best segments after " << result.rounds
       << " rounds of tracking); give a marker set (--markerset)";
     throw std::invalid_argument(s.str());
   }

@@ -17,13 +17,14 @@
 namespace s2kf::track {
 
 struct RigidClusterOptions {
-  /// A pair is rigid when its distance's SD stays below floor_mm + fraction * mean distance (the
-  /// 8 mm soft-tissue artefact of the simulated subjects gives pair SDs of up to about 10 mm; a
-  /// joint that moves 20 degrees moves a marker 300 mm away by about 100 mm).
-  double floor_mm = 12.0;
-  double fraction = 0.04;
-  long max_frames = 600;     ///< frames used at most, spread evenly over the recording
-  long min_common = 10;      ///< frames in which both markers of a pair must be seen
+  /// A pair is rigid when its distance's SD stays below floor_mm + fraction * mean distance: sensor
+  /// noise and a few mm of skin motion pass, a joint that turns 20 degrees (a marker 300 mm away
+  /// moves about 100 mm) does not. The 8 mm soft-tissue artefact of the simulated subjects splits
+  /// some segments into several clusters, which the inference allows.
+  double floor_mm = 6.0;
+  double fraction = 0.01;
+  long max_frames = 600;  ///< frames used at most, spread evenly over the recording
+  long min_common = 10;   ///< frames in which both markers of a pair must be seen
 };
 
 struct RigidClusters {
