@@ -54,13 +54,11 @@ inline track::InferredMarkerSet infer_marker_set_file(const std::string& input, 
   return inferred;
 }
 
-/// Whether the best bundled set is good enough for these labels: it names at least 8 of them (the
-/// tracker's start) and at least a third of the labelled points.
+/// Whether the best bundled set is good enough for these labels: it names at least as many of
+/// them as the tracker needs to start (8). Not a fraction of the labels: Vicon files carry dozens
+/// of virtual points (PELO, LTIO, ...) beside the markers.
 inline bool bundled_set_fits(const std::vector<std::string>& labels, const body::MarkerSet& set) {
-  long labelled = 0;
-  for (const std::string& label : labels) labelled += label.empty() ? 0 : 1;
-  const int found = track::map_marker_set(labels, set).markers_used();
-  return found >= 8 && 3 * found >= labelled;
+  return track::map_marker_set(labels, set).markers_used() >= track::TrackerOptions{}.min_markers_to_start;
 }
 
 /// choose_marker_set_for, and when neither option names a set and no bundled set fits the labels,

@@ -262,6 +262,10 @@ TEST(MarkerSetInference, TheProgramInfersWritesAndTracks) {
   EXPECT_NE(summary["marker_set_source"].get<std::string>().find(prefix + "_markerset.json"),
             std::string::npos);
 
+  // s2kf view rebuilds the session from the summary: it finds the inferred set beside the outputs.
+  const auto [viewed, view_output] = test_support::run_command("view " + prefix);
+  EXPECT_EQ(viewed, 0) << view_output;
+
   // One rigid object: refused, and nothing written.
   MarkerSequence rigid = walk;
   for (Eigen::Index f = 0; f < rigid.frame_count(); ++f)
