@@ -73,7 +73,19 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
   const int best = track::choose_marker_set(labels, sets);
   if (best >= 0 && bundled_set_fits(labels, sets[static_cast<std::size_t>(best)]))
     return choose_marker_set_for(labels, markerset, subject);
-  const track::InferredMarkerSet inferred = infer_marker_set_file(input, inferred_path, -1);
+  const std::string bundled_problem =
+      best < 0 ? std::string("none of the recording's labels belongs to a bundled marker set")
+               : "no bundled marker set names 8 of the recording's labels (best: " +
+                     sets[static_cast<std::size_t>(best)].name + ")";
+  track::InferredMarkerSet inferred;
+  try {
+    inferred = infer_marker_set_file(input, inferred_path, -1);
+  } catch (const UserError& e) {
+    // The inference's sentence ends in "give a marker set (--markerset)"; say first why it ran.
+    std::string why = e.what();
+    if (why.rfind(input + ": ", 0) == 0) why = why.substr(input.size() + 2);
+    throw UserError(input + ": " + bundled_problem + ", and " + why);
+  }
   MarkerSetChoice choice;
   choice.set = inferred.set;
   choice.source =
