@@ -4,6 +4,7 @@
 #include "extra_outputs.hpp"
 #include "frame_figure.hpp"
 #include "frame_reports.hpp"
+#include "inferred_marker_set.hpp"
 #include "interruption.hpp"
 #include "marker_set_json.hpp"
 #include "recording_batch.hpp"
@@ -134,8 +135,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     throw UserError(input + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
                     std::to_string(info.frame_count) + " frames (0-based)");
 
-  const MarkerSetChoice choice =
-      choose_marker_set_for(source->labels(), settings.markerset, settings.subject);
+  const MarkerSetChoice choice = choose_or_infer_marker_set(input, source->labels(), settings.markerset,
+                                                            settings.subject, prefix + "_markerset.json");
   track::SessionOptions session_options;
   try {
     session_options.tracker = track::preset_options(settings.preset, info.rate);

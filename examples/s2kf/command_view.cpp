@@ -47,6 +47,8 @@ std::pair<body::BodyModel, track::MarkerMapping> tracked_model(const std::string
     subject = origin.substr(kSubjectSource.size());
   else if (origin == "given")
     markerset = summary["marker_set"].is_string() ? summary["marker_set"].get<std::string>() : std::string();
+  else if (origin.rfind("inferred", 0) == 0)  // s2kf track wrote the inferred set beside its outputs
+    markerset = prefix + "_markerset.json";
   MarkerSetChoice choice;
   try {
     choice = choose_marker_set_for(source->labels(), markerset, subject);

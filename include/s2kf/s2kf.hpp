@@ -58,7 +58,9 @@
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/hidden_time_error.hpp>
 #include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/marker_set_inference.hpp>
 #include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/track/rigid_clusters.hpp>
 #include <s2kf/track/rigid_fit.hpp>
 #include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/session.hpp>

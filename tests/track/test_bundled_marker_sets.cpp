@@ -112,8 +112,9 @@ Tracked track_simulated(const Simulated& s, const body::MarkerSet& set) {
 /// joint centre of its segment (a marker on the wrong segment would be).
 TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
   const std::vector<std::string> names = cli::bundled_marker_set_names();
-  for (const char* expected : {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation",
-                               "plugin_gait_lower", "plugin_gait_upper", "kit", "cmu", "plugin_gait"})
+  for (const char* expected :
+       {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation", "qualisys_sports",
+        "plugin_gait_lower", "plugin_gait_upper", "kit", "cmu", "plugin_gait"})
     EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
   const body::BodyModel base = body::mmm_body_model(1000);
   const body::FrameTransforms zero = body::joint_frames(
@@ -150,8 +151,8 @@ TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
 /// distance after convergence.
 TEST(BundledMarkerSets, EachTracksASimulatedRecordingOfItsOwnMarkers) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  for (const char* name :
-       {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation", "plugin_gait"}) {
+  for (const char* name : {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation",
+                           "qualisys_sports", "plugin_gait"}) {
     const body::MarkerSet set = bundled(name);
     const Simulated s = simulate_with(set, 5);
     const Tracked t = track_simulated(s, set);
