@@ -129,24 +129,33 @@ double median_seconds(int reps, F&& f) {
   return t[reps / 2];
 }
 
-/// The floor: L single-pose FK calls and one symmetric rank-L update of the (3 visible)^2
-/// covariance of the predicted markers. Returns seconds (median of `reps`).
+/// The floor: the work no sampling step can avoid, each part by the fastest kernel the project
+/// has: the batched FK of the L samples (the measurement model on the whole block) and one
+/// symmetric rank-L update of the (3 visible)^2 covariance of the predicted markers, summed in the
+/// precision the tracker sums its moments in (single). Returns seconds (median of `reps`).
 struct Floor {
   std::vector<body::Pose> poses;
-  Eigen::MatrixXd deviations, cyy;
+  Eigen::MatrixXd x, y;
+  Eigen::MatrixXf deviations, cyy;
+  body::MarkerMeasurementModel h;
   body::BodyModel model;
 
-  Floor(const ConvergedState& c, const SampleSet& set, int visible_markers) : model(c.model.model()) {
-    const Eigen::MatrixXd x = draw(c, set);
+  Floor(const ConvergedState& c, const SampleSet& set, int visible_markers)
+      : x(draw(c, set)), h(c.model), model(c.model.model()) {
     for (Eigen::Index i = 0; i < x.cols(); ++i) poses.push_back(c.model.pose(x.col(i)));
-    Eigen::MatrixXd y(c.model.measurement_dimension(), x.cols());
-    body::MarkerMeasurementModel h = c.model;
+    y.resize(h.measurement_dimension(), x.cols());
     h(x, y);
-    deviations = y.topRows(3 * visible_markers);
-    deviations.colwise() -= deviations.rowwise().mean();
-    cyy = Eigen::MatrixXd::Identity(deviations.rows(), deviations.rows());
+    Eigen::MatrixXd d = y.topRows(3 * visible_markers);
+    d.colwise() -= d.rowwise().mean();
+    deviations = d.cast<float>();
+    cyy = Eigen::MatrixXf::Identity(deviations.rows(), deviations.rows());
   }
   void fk() {
+    h(x, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+  /// L calls of the single-pose FK (allocating; for comparison only).
+  void single_pose_fk() {
     for (const body::Pose& pose : poses) {
       Eigen::Matrix3Xd markers = body::marker_positions(model, pose);
       benchmark::DoNotOptimize(markers.data());
@@ -198,6 +207,26 @@ void BM_TrackStep(benchmark::State& state) {
 }
 BENCHMARK(BM_TrackStep)->Apply(add_args);
 
+// The same step with the moments summed in double (TrackerOptions::single_precision_moments off):
+// what single precision saves.
+void BM_TrackStepDoubleMoments(benchmark::State& state) {
+  const int samples = static_cast<int>(state.range(0));
+  const Scenario& s = Scenario::get();
+  const auto& visibility = s.visibility(static_cast<int>(state.range(1)));
+  track::TrackerOptions options;
+  options.samples = samples;
+  options.single_precision_moments = false;
+  track::Tracker tracker(s.model, s.mapping, options, s.rate, lcd_sample_set(46, samples).set);
+  for (int f = 0; f < kWarmupFrames; ++f) tracker.process(s.frames[f], s.all_visible[f]);
+  std::size_t f = kWarmupFrames;
+  for (auto _ : state) {
+    const track::FrameEstimate& e = tracker.process(s.frames[f], visibility[f]);
+    benchmark::DoNotOptimize(e.pose.joints.data());
+    if (++f == s.frames.size()) f = kWarmupFrames;
+  }
+}
+BENCHMARK(BM_TrackStepDoubleMoments)->Apply(add_args);
+
 // The same step with the constant-velocity model (92-state prediction, the 46-dimensional sampled
 // update, the rates conditioned on it): the latency it adds at the same L.
 void BM_TrackStepConstantVelocity(benchmark::State& state) {
@@ -230,7 +259,7 @@ BENCHMARK(BM_Floor)->Apply(add_args);
 void BM_FloorSinglePoseFk(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));
   Floor floor(converged_state(samples), lcd_sample_set(46, samples).set, 50);
-  for (auto _ : state) floor.fk();
+  for (auto _ : state) floor.single_pose_fk();
 }
 BENCHMARK(BM_FloorSinglePoseFk)->Args({301, 50})->ArgNames({"L", "visible"})->Unit(benchmark::kMicrosecond);
 

@@ -314,6 +314,7 @@ S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points
   else
     update_options.block_gate_probability = options_.marker_gate_probability;  // once converged
   update_options.block_size = 3;
+  update_options.single_precision_moments = options_.single_precision_moments;
   ++frames_since_start_;
   estimate_.status = FilterStatus::nothing_observed;
   estimate_.nis = std::numeric_limits<double>::quiet_NaN();

@@ -66,6 +66,11 @@ struct TrackerOptions {
 
   double gate_probability = 0;  ///< 0: off; else reject a whole frame whose NIS is beyond this quantile
 
+  /// Sum the steady-state update's sample moments (Cyy, Cyx) in single precision, factorise and
+  /// update in double (UpdateOptions::single_precision_moments): about half the step's time, with
+  /// a relative effect on the estimate far below the marker noise (docs/benchmarks.md).
+  bool single_precision_moments = true;
+
   /// Per-marker gate: a marker whose innovation is beyond this chi-square quantile (3 degrees of
   /// freedom) of its predicted covariance is left out of the frame's update, so a mislabelled,
   /// swapped or jumping marker does not pull the pose (FrameEstimate::rejected_markers); 0: off.
