@@ -130,9 +130,9 @@ double median_seconds(int reps, F&& f) {
 }
 
 /// The floor: the work no sampling step can avoid, each part by the fastest kernel the project
-/// has: the batched FK of the L samples (the measurement model on the whole block) and one
-/// symmetric rank-L update of the (3 visible)^2 covariance of the predicted markers, summed in the
-/// precision the tracker sums its moments in (single). Returns seconds (median of `reps`).
+/// has and in the precision the tracker uses for it (single): the batched FK of the L samples (the
+/// measurement model on the whole block) and one symmetric rank-L update of the (3 visible)^2
+/// covariance of the predicted markers. Returns seconds (median of `reps`).
 struct Floor {
   std::vector<body::Pose> poses;
   Eigen::MatrixXd x, y;
@@ -142,6 +142,7 @@ struct Floor {
 
   Floor(const ConvergedState& c, const SampleSet& set, int visible_markers)
       : x(draw(c, set)), h(c.model), model(c.model.model()) {
+    h.set_single_precision(true);
     for (Eigen::Index i = 0; i < x.cols(); ++i) poses.push_back(c.model.pose(x.col(i)));
     y.resize(h.measurement_dimension(), x.cols());
     h(x, y);
@@ -207,15 +208,15 @@ void BM_TrackStep(benchmark::State& state) {
 }
 BENCHMARK(BM_TrackStep)->Apply(add_args);
 
-// The same step with the moments summed in double (TrackerOptions::single_precision_moments off):
+// The same step with the sample pipeline in double (TrackerOptions::single_precision_samples off):
 // what single precision saves.
-void BM_TrackStepDoubleMoments(benchmark::State& state) {
+void BM_TrackStepDouble(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));
   const Scenario& s = Scenario::get();
   const auto& visibility = s.visibility(static_cast<int>(state.range(1)));
   track::TrackerOptions options;
   options.samples = samples;
-  options.single_precision_moments = false;
+  options.single_precision_samples = false;
   track::Tracker tracker(s.model, s.mapping, options, s.rate, lcd_sample_set(46, samples).set);
   for (int f = 0; f < kWarmupFrames; ++f) tracker.process(s.frames[f], s.all_visible[f]);
   std::size_t f = kWarmupFrames;
@@ -225,7 +226,7 @@ void BM_TrackStepDoubleMoments(benchmark::State& state) {
     if (++f == s.frames.size()) f = kWarmupFrames;
   }
 }
-BENCHMARK(BM_TrackStepDoubleMoments)->Apply(add_args);
+BENCHMARK(BM_TrackStepDouble)->Apply(add_args);
 
 // The same step with the constant-velocity model (92-state prediction, the 46-dimensional sampled
 // update, the rates conditioned on it): the latency it adds at the same L.
@@ -299,10 +300,12 @@ BENCHMARK(BM_TrackFirstFrames)
 
 // ---- Parts of the step, on the converged state ----
 
-// Batched FK of the whole sample block through the tracker's measurement model.
-void BM_PartForwardKinematics(benchmark::State& state) {
+// Batched FK of the whole sample block through the tracker's measurement model, in single
+// precision as the tracker runs it (BM_PartForwardKinematicsDouble: in double).
+void forward_kinematics_part(benchmark::State& state, bool single) {
   const int samples = static_cast<int>(state.range(0));
   ConvergedState c = converged_state(samples);
+  c.model.set_single_precision(single);
   const Eigen::MatrixXd x = draw(c, lcd_sample_set(46, samples).set);
   Eigen::MatrixXd y(c.model.measurement_dimension(), x.cols());
   for (auto _ : state) {
@@ -310,10 +313,17 @@ void BM_PartForwardKinematics(benchmark::State& state) {
     benchmark::DoNotOptimize(y.data());
   }
 }
+void BM_PartForwardKinematics(benchmark::State& state) { forward_kinematics_part(state, true); }
 BENCHMARK(BM_PartForwardKinematics)->Apply(add_args);
+void BM_PartForwardKinematicsDouble(benchmark::State& state) { forward_kinematics_part(state, false); }
+BENCHMARK(BM_PartForwardKinematicsDouble)
+    ->Args({301, 50})
+    ->ArgNames({"L", "visible"})
+    ->Unit(benchmark::kMicrosecond);
 
 // The filter's update without FK: the measurement model hands back a stored prediction block,
-// so this is sampling, moments, factorisation, gain, update and the posterior check.
+// so this is sampling, moments (in single precision, as the tracker sums them), factorisation,
+// gain, update and the posterior check.
 void BM_PartFilterWithoutFk(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));
   const int visible = static_cast<int>(state.range(1));
@@ -329,12 +339,14 @@ void BM_PartFilterWithoutFk(benchmark::State& state) {
   observed.tail(3 * (50 - visible)).setConstant(false);
   const Eigen::MatrixXd r = body::marker_noise(100.0, measurement.size() / 3);
   S2kf filter(set);
+  UpdateOptions options;
+  options.single_precision_moments = true;
   GaussianXd work = c.state;
   (void)s;
   for (auto _ : state) {
     work.mean = c.state.mean;  // small copies (46 + 46^2 doubles), no allocation
     work.covariance = c.state.covariance;
-    benchmark::DoNotOptimize(filter.update(work, stored, measurement, r, observed).nis);
+    benchmark::DoNotOptimize(filter.update(work, stored, measurement, r, observed, options).nis);
   }
 }
 BENCHMARK(BM_PartFilterWithoutFk)->Apply(add_args);

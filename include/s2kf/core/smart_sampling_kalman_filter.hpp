@@ -328,11 +328,13 @@ class SmartSamplingKalmanFilter {
   template <typename MeasurementModel>
   FilterStatus evaluate_observed(MeasurementModel& h, Eigen::Index m) {
     const Eigen::Index mo = observed_count_;
-    predictions_.resize(m, samples_.count());
-    h(static_cast<const Eigen::MatrixXd&>(x_), predictions_);
     const Eigen::Index count = samples_.count();
     if (y_dev_.rows() < m || y_dev_.cols() != count)
       y_dev_.resize(std::max<Eigen::Index>(y_dev_.rows(), m), count);
+    // With every component observed the model writes straight into y_dev_ (no gather).
+    const bool direct = mo == m && y_dev_.rows() == m;
+    if (!direct) predictions_.resize(m, count);
+    h(static_cast<const Eigen::MatrixXd&>(x_), direct ? y_dev_ : predictions_);
     if (symmetric_ && (pair_difference_.rows() < m || pair_difference_.cols() != half_count_))
       pair_difference_.resize(std::max<Eigen::Index>(pair_difference_.rows(), m), half_count_);
     y_mean_.resize(std::max<Eigen::Index>(y_mean_.size(), m));
@@ -343,7 +345,9 @@ class SmartSamplingKalmanFilter {
     const Eigen::Index* index = index_.data();
     for (Eigen::Index i = 0; i < count; ++i) {
       auto to = y_dev_.col(i).head(mo);
-      if (mo == m) {
+      if (direct) {
+        // already there
+      } else if (mo == m) {
         to = predictions_.col(i);
       } else {
         const double* from = predictions_.col(i).data();

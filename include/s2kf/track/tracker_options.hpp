@@ -66,10 +66,12 @@ struct TrackerOptions {
 
   double gate_probability = 0;  ///< 0: off; else reject a whole frame whose NIS is beyond this quantile
 
-  /// Sum the steady-state update's sample moments (Cyy, Cyx) in single precision, factorise and
-  /// update in double (UpdateOptions::single_precision_moments): about half the step's time, with
-  /// a relative effect on the estimate far below the marker noise (docs/benchmarks.md).
-  bool single_precision_moments = true;
+  /// The sample pipeline in single precision: forward kinematics of the samples
+  /// (MarkerMeasurementModel::set_single_precision) and the sums of their moments Cyy, Cyx
+  /// (UpdateOptions::single_precision_moments); factorisation, gain and update stay in double.
+  /// About 30 % of the step's time, with marker predictions rounded to about 1e-4 mm, far below
+  /// the marker noise (docs/benchmarks.md).
+  bool single_precision_samples = true;
 
   /// Per-marker gate: a marker whose innovation is beyond this chi-square quantile (3 degrees of
   /// freedom) of its predicted covariance is left out of the frame's update, so a mislabelled,
