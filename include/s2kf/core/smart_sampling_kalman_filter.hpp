@@ -333,7 +333,8 @@ class SmartSamplingKalmanFilter {
       y_dev_.resize(std::max<Eigen::Index>(y_dev_.rows(), m), count);
     // With every component observed the model writes straight into y_dev_ (no gather).
     const bool direct = mo == m && y_dev_.rows() == m;
-    if (!direct) predictions_.resize(m, count);
+    // Sized even when unused now, so that a later frame with hidden rows does not allocate.
+    predictions_.resize(m, count);
     h(static_cast<const Eigen::MatrixXd&>(x_), direct ? y_dev_ : predictions_);
     if (symmetric_ && (pair_difference_.rows() < m || pair_difference_.cols() != half_count_))
       pair_difference_.resize(std::max<Eigen::Index>(pair_difference_.rows(), m), half_count_);
