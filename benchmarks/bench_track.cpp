@@ -130,9 +130,9 @@ double median_seconds(int reps, F&& f) {
 }
 
 /// The floor: the work no sampling step can avoid, each part by the fastest kernel the project
-/// has and in the precision the tracker uses for it (single): the batched FK of the L samples (the
-/// measurement model on the whole block) and one symmetric rank-L update of the (3 visible)^2
-/// covariance of the predicted markers. Returns seconds (median of `reps`).
+/// has and in the precision the tracker uses for it: the batched FK of the L samples (the
+/// measurement model on the whole block, double) and one symmetric rank-L update of the
+/// (3 visible)^2 covariance of the predicted markers (single). Returns seconds (median of `reps`).
 struct Floor {
   std::vector<body::Pose> poses;
   Eigen::MatrixXd x, y;
@@ -142,7 +142,6 @@ struct Floor {
 
   Floor(const ConvergedState& c, const SampleSet& set, int visible_markers)
       : x(draw(c, set)), h(c.model), model(c.model.model()) {
-    h.set_single_precision(true);
     for (Eigen::Index i = 0; i < x.cols(); ++i) poses.push_back(c.model.pose(x.col(i)));
     y.resize(h.measurement_dimension(), x.cols());
     h(x, y);
@@ -208,7 +207,7 @@ void BM_TrackStep(benchmark::State& state) {
 }
 BENCHMARK(BM_TrackStep)->Apply(add_args);
 
-// The same step with the sample pipeline in double (TrackerOptions::single_precision_samples off):
+// The same step with the moments summed in double (TrackerOptions::single_precision_moments off):
 // what single precision saves.
 void BM_TrackStepDouble(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));
@@ -216,7 +215,7 @@ void BM_TrackStepDouble(benchmark::State& state) {
   const auto& visibility = s.visibility(static_cast<int>(state.range(1)));
   track::TrackerOptions options;
   options.samples = samples;
-  options.single_precision_samples = false;
+  options.single_precision_moments = false;
   track::Tracker tracker(s.model, s.mapping, options, s.rate, lcd_sample_set(46, samples).set);
   for (int f = 0; f < kWarmupFrames; ++f) tracker.process(s.frames[f], s.all_visible[f]);
   std::size_t f = kWarmupFrames;
@@ -300,8 +299,8 @@ BENCHMARK(BM_TrackFirstFrames)
 
 // ---- Parts of the step, on the converged state ----
 
-// Batched FK of the whole sample block through the tracker's measurement model, in single
-// precision as the tracker runs it (BM_PartForwardKinematicsDouble: in double).
+// Batched FK of the whole sample block through the tracker's measurement model, in double as the
+// tracker runs it by default (BM_PartForwardKinematicsSingle: in float).
 void forward_kinematics_part(benchmark::State& state, bool single) {
   const int samples = static_cast<int>(state.range(0));
   ConvergedState c = converged_state(samples);
@@ -313,10 +312,10 @@ void forward_kinematics_part(benchmark::State& state, bool single) {
     benchmark::DoNotOptimize(y.data());
   }
 }
-void BM_PartForwardKinematics(benchmark::State& state) { forward_kinematics_part(state, true); }
+void BM_PartForwardKinematics(benchmark::State& state) { forward_kinematics_part(state, false); }
 BENCHMARK(BM_PartForwardKinematics)->Apply(add_args);
-void BM_PartForwardKinematicsDouble(benchmark::State& state) { forward_kinematics_part(state, false); }
-BENCHMARK(BM_PartForwardKinematicsDouble)
+void BM_PartForwardKinematicsSingle(benchmark::State& state) { forward_kinematics_part(state, true); }
+BENCHMARK(BM_PartForwardKinematicsSingle)
     ->Args({301, 50})
     ->ArgNames({"L", "visible"})
     ->Unit(benchmark::kMicrosecond);
