@@ -129,24 +129,33 @@ double median_seconds(int reps, F&& f) {
   return t[reps / 2];
 }
 
-/// The floor: L single-pose FK calls and one symmetric rank-L update of the (3 visible)^2
-/// covariance of the predicted markers. Returns seconds (median of `reps`).
+/// The floor: the work no sampling step can avoid, each part by the fastest kernel the project
+/// has and in the precision the tracker uses for it: the batched FK of the L samples (the
+/// measurement model on the whole block, double) and one symmetric rank-L update of the
+/// (3 visible)^2 covariance of the predicted markers (single). Returns seconds (median of `reps`).
 struct Floor {
   std::vector<body::Pose> poses;
-  Eigen::MatrixXd deviations, cyy;
+  Eigen::MatrixXd x, y;
+  Eigen::MatrixXf deviations, cyy;
+  body::MarkerMeasurementModel h;
   body::BodyModel model;
 
-  Floor(const ConvergedState& c, const SampleSet& set, int visible_markers) : model(c.model.model()) {
-    const Eigen::MatrixXd x = draw(c, set);
+  Floor(const ConvergedState& c, const SampleSet& set, int visible_markers)
+      : x(draw(c, set)), h(c.model), model(c.model.model()) {
     for (Eigen::Index i = 0; i < x.cols(); ++i) poses.push_back(c.model.pose(x.col(i)));
-    Eigen::MatrixXd y(c.model.measurement_dimension(), x.cols());
-    body::MarkerMeasurementModel h = c.model;
+    y.resize(h.measurement_dimension(), x.cols());
     h(x, y);
-    deviations = y.topRows(3 * visible_markers);
-    deviations.colwise() -= deviations.rowwise().mean();
-    cyy = Eigen::MatrixXd::Identity(deviations.rows(), deviations.rows());
+    Eigen::MatrixXd d = y.topRows(3 * visible_markers);
+    d.colwise() -= d.rowwise().mean();
+    deviations = d.cast<float>();
+    cyy = Eigen::MatrixXf::Identity(deviations.rows(), deviations.rows());
   }
   void fk() {
+    h(x, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+  /// L calls of the single-pose FK (allocating; for comparison only).
+  void single_pose_fk() {
     for (const body::Pose& pose : poses) {
       Eigen::Matrix3Xd markers = body::marker_positions(model, pose);
       benchmark::DoNotOptimize(markers.data());
@@ -198,6 +207,26 @@ void BM_TrackStep(benchmark::State& state) {
 }
 BENCHMARK(BM_TrackStep)->Apply(add_args);
 
+// The same step with the moments summed in double (TrackerOptions::single_precision_moments off):
+// what single precision saves.
+void BM_TrackStepDouble(benchmark::State& state) {
+  const int samples = static_cast<int>(state.range(0));
+  const Scenario& s = Scenario::get();
+  const auto& visibility = s.visibility(static_cast<int>(state.range(1)));
+  track::TrackerOptions options;
+  options.samples = samples;
+  options.single_precision_moments = false;
+  track::Tracker tracker(s.model, s.mapping, options, s.rate, lcd_sample_set(46, samples).set);
+  for (int f = 0; f < kWarmupFrames; ++f) tracker.process(s.frames[f], s.all_visible[f]);
+  std::size_t f = kWarmupFrames;
+  for (auto _ : state) {
+    const track::FrameEstimate& e = tracker.process(s.frames[f], visibility[f]);
+    benchmark::DoNotOptimize(e.pose.joints.data());
+    if (++f == s.frames.size()) f = kWarmupFrames;
+  }
+}
+BENCHMARK(BM_TrackStepDouble)->Apply(add_args);
+
 // The same step with the constant-velocity model (92-state prediction, the 46-dimensional sampled
 // update, the rates conditioned on it): the latency it adds at the same L.
 void BM_TrackStepConstantVelocity(benchmark::State& state) {
@@ -230,7 +259,7 @@ BENCHMARK(BM_Floor)->Apply(add_args);
 void BM_FloorSinglePoseFk(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));
   Floor floor(converged_state(samples), lcd_sample_set(46, samples).set, 50);
-  for (auto _ : state) floor.fk();
+  for (auto _ : state) floor.single_pose_fk();
 }
 BENCHMARK(BM_FloorSinglePoseFk)->Args({301, 50})->ArgNames({"L", "visible"})->Unit(benchmark::kMicrosecond);
 
@@ -270,10 +299,12 @@ BENCHMARK(BM_TrackFirstFrames)
 
 // ---- Parts of the step, on the converged state ----
 
-// Batched FK of the whole sample block through the tracker's measurement model.
-void BM_PartForwardKinematics(benchmark::State& state) {
+// Batched FK of the whole sample block through the tracker's measurement model, in double as the
+// tracker runs it by default (BM_PartForwardKinematicsSingle: in float).
+void forward_kinematics_part(benchmark::State& state, bool single) {
   const int samples = static_cast<int>(state.range(0));
   ConvergedState c = converged_state(samples);
+  c.model.set_single_precision(single);
   const Eigen::MatrixXd x = draw(c, lcd_sample_set(46, samples).set);
   Eigen::MatrixXd y(c.model.measurement_dimension(), x.cols());
   for (auto _ : state) {
@@ -281,10 +312,17 @@ void BM_PartForwardKinematics(benchmark::State& state) {
     benchmark::DoNotOptimize(y.data());
   }
 }
+void BM_PartForwardKinematics(benchmark::State& state) { forward_kinematics_part(state, false); }
 BENCHMARK(BM_PartForwardKinematics)->Apply(add_args);
+void BM_PartForwardKinematicsSingle(benchmark::State& state) { forward_kinematics_part(state, true); }
+BENCHMARK(BM_PartForwardKinematicsSingle)
+    ->Args({301, 50})
+    ->ArgNames({"L", "visible"})
+    ->Unit(benchmark::kMicrosecond);
 
 // The filter's update without FK: the measurement model hands back a stored prediction block,
-// so this is sampling, moments, factorisation, gain, update and the posterior check.
+// so this is sampling, moments (in single precision, as the tracker sums them), factorisation,
+// gain, update and the posterior check.
 void BM_PartFilterWithoutFk(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));
   const int visible = static_cast<int>(state.range(1));
@@ -300,12 +338,14 @@ void BM_PartFilterWithoutFk(benchmark::State& state) {
   observed.tail(3 * (50 - visible)).setConstant(false);
   const Eigen::MatrixXd r = body::marker_noise(100.0, measurement.size() / 3);
   S2kf filter(set);
+  UpdateOptions options;
+  options.single_precision_moments = true;
   GaussianXd work = c.state;
   (void)s;
   for (auto _ : state) {
     work.mean = c.state.mean;  // small copies (46 + 46^2 doubles), no allocation
     work.covariance = c.state.covariance;
-    benchmark::DoNotOptimize(filter.update(work, stored, measurement, r, observed).nis);
+    benchmark::DoNotOptimize(filter.update(work, stored, measurement, r, observed, options).nis);
   }
 }
 BENCHMARK(BM_PartFilterWithoutFk)->Apply(add_args);

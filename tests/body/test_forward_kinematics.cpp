@@ -192,6 +192,7 @@ TEST(BatchedForwardKinematics, EqualsSinglePoseForwardKinematics) {
   check_batch_equals_single(1, 1);
   check_batch_equals_single(7, 2);
   check_batch_equals_single(301, 3);
+  check_batch_equals_single(1001, 4);  // four blocks
 }
 
 TEST(BatchedForwardKinematics, WorksOnBlocksOfAStateMatrixAndReusesTheWorkspace) {

@@ -92,6 +92,30 @@ TEST(MarkerMeasurementModel, LocalRotationErrorModeEqualsForwardKinematicsAboutT
   }
 }
 
+TEST(MarkerMeasurementModel, SinglePrecisionAgreesWithDoubleToFloatRoundingAtBodyScale) {
+  // The tracker's sample pipeline: float FK. Coordinates of about a metre in float carry about
+  // 6e-5 mm of rounding each, and the chain of up to 8 joints adds a few roundings of the same
+  // size; 1e-3 mm is far beyond that and far below the marker noise (about 10 mm).
+  const BodyModel body = mmm_body_model(1750);
+  for (const auto orientation :
+       {OrientationParameterization::roll_pitch_yaw, OrientationParameterization::local_rotation_error}) {
+    MarkerMeasurementModel twice(body, orientation), single(body, orientation);
+    const Eigen::Matrix3d reference = rotation_from_rpy(Eigen::Vector3d(0.4, M_PI / 2, -1.0));
+    twice.set_reference_orientation(reference);
+    single.set_reference_orientation(reference);
+    single.set_single_precision(true);
+    std::mt19937 rng(4);
+    Eigen::MatrixXd states = random_states(rng, 701, 0.5);             // three blocks
+    states.col(1).segment<3>(3) = Eigen::Vector3d(1e-7, -2e-6, 3e-8);  // the small-angle series
+    Eigen::MatrixXd expected(150, states.cols()), predictions(150, states.cols());
+    twice(states, expected);
+    single(states, predictions);
+    const double worst = (predictions - expected).cwiseAbs().maxCoeff();
+    EXPECT_LT(worst, 1e-3);
+    EXPECT_GT(worst, 0.0);  // it did run in float
+  }
+}
+
 // At pitch = 90 deg roll and yaw turn about the same axis: their marker Jacobian columns are parallel.
 // The local rotation error keeps three independent directions there.
 TEST(MarkerMeasurementModel, LocalRotationErrorStaysFullRankAtPitchNinetyDegrees) {

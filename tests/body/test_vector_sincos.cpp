@@ -47,4 +47,32 @@ TEST(VectorSinCos, LargeAndNonFiniteArgumentsBehaveLikeTheStandardLibrary) {
   EXPECT_NEAR(s[6], std::sin(0.5), 1e-16);
 }
 
+TEST(VectorSinCos, SinglePrecisionAgreesWithTheStandardLibraryToAFewFloatUlps) {
+  std::mt19937 rng(2);
+  std::vector<float> x;
+  for (float scale : {1e-6f, 0.7f, 3.5f, 20.0f, 1e3f, 8e3f}) {
+    std::uniform_real_distribution<float> unit(-scale, scale);
+    for (int k = 0; k < 2000; ++k) x.push_back(unit(rng));
+  }
+  for (int k = -40; k <= 40; ++k) x.push_back(static_cast<float>(k * M_PI / 4));
+  x.push_back(0.0f);
+  std::vector<float> s(x.size()), c(x.size());
+  s2kf::body::vector_sincos(x.data(), s.data(), c.data(), static_cast<Eigen::Index>(x.size()));
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    // Against the double-precision functions of the same float argument: float's unit roundoff
+    // (6e-8) a few times over, and the argument's own rounding for large |x|.
+    const double xi = x[i], tol = 2.4e-7 * std::max(1.0, std::abs(xi) / 100);
+    EXPECT_NEAR(s[i], std::sin(xi), tol) << xi;
+    EXPECT_NEAR(c[i], std::cos(xi), tol) << xi;
+  }
+  std::vector<float> odd{1e5f, -3e7f, std::numeric_limits<float>::quiet_NaN()};
+  std::vector<float> so(odd.size()), co(odd.size());
+  s2kf::body::vector_sincos(odd.data(), so.data(), co.data(), static_cast<Eigen::Index>(odd.size()));
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(so[i], static_cast<float>(std::sin(static_cast<double>(odd[i]))));
+    EXPECT_EQ(co[i], static_cast<float>(std::cos(static_cast<double>(odd[i]))));
+  }
+  EXPECT_TRUE(std::isnan(so[2]) && std::isnan(co[2]));
+}
+
 }  // namespace

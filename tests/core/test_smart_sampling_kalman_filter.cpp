@@ -136,6 +136,36 @@ TEST(S2kfLinear, TrackingSizedUpdateMatchesKalmanFilter) {
   }
 }
 
+TEST(S2kfLinear, SinglePrecisionMomentsMatchKalmanFilterToFloatRounding) {
+  // The tracker's setting: Cyy and Cyx summed in float, the rest in double. The result differs
+  // from the double-precision update (the option takes effect) by float rounding only: about the
+  // unit roundoff of float (6e-8) times the condition of Cyy, which is near 1e6 for these random
+  // matrices (measured: 2.4e-5); a wrong formula would miss by order 1.
+  std::mt19937_64 rng(7);
+  const int n = 46, m = 150;
+  for (const SampleSet& set : {s2kf::ukf_sample_set(n), s2kf::compute_lcd_sample_set(n, 301).set}) {
+    for (const int hidden : {0, 60}) {
+      LinearModel model{random_matrix(m, n, rng), random_matrix(m, 1, rng)};
+      const GaussianXd prior(random_matrix(n, 1, rng), random_spd(n, rng));
+      GaussianXd single = prior, twice = prior, kf = prior;
+      const Eigen::MatrixXd r = random_spd(m, rng);
+      const Eigen::VectorXd y = random_matrix(m, 1, rng);
+      ObservedMask observed = ObservedMask::Constant(m, true);
+      for (int i = 0; i < hidden; ++i) observed(2 * i) = false;
+      s2kf::UpdateOptions options;
+      options.single_precision_moments = true;
+      S2kf filter(set);
+      ASSERT_TRUE(filter.update(single, model, y, r, observed, options).ok());
+      ASSERT_TRUE(filter.update(twice, model, y, r, observed).ok());
+      kalman_update(kf, model.h, y - model.offset, r, observed);
+      EXPECT_LT(relative_error(single.mean, kf.mean), 1e-4) << set.kind << ", " << hidden << " hidden";
+      EXPECT_LT(relative_error(single.covariance, kf.covariance), 1e-4) << set.kind << ", " << hidden;
+      EXPECT_LT(relative_error(twice.mean, kf.mean), 1e-9) << set.kind << ", " << hidden << " hidden";
+      EXPECT_GT((single.mean - twice.mean).norm(), 0.0) << set.kind << ", " << hidden << " hidden";
+    }
+  }
+}
+
 TEST(S2kfLinear, SeveralStepsWithPredictionAndAMissingComponentMatchKalmanFilter) {
   std::mt19937_64 rng(2);
   const int n = 5, m = 4;
@@ -322,6 +352,36 @@ TEST(S2kfBlockGating, AnOutlyingBlockIsLeftOutAndTheRestIsTheKalmanUpdate) {
     kalman_update(expected, t.model.h, y, t.r, first_two);
     EXPECT_LT(relative_error(s.mean, expected.mean), 1e-10) << set.kind;
     EXPECT_LT(relative_error(s.covariance, expected.covariance), 1e-10) << set.kind;
+  }
+}
+
+TEST(S2kfBlockGating, AnOutlyingMiddleBlockIsCutOutOfTheMomentsInEitherPrecision) {
+  // The gate reads the blocks' covariances off Cyy and removes a rejected block's rows and columns
+  // in place: with the middle block out (and one component of the last hidden), the kept rows move
+  // up, and the result must still be the Kalman update on exactly the kept components.
+  ThreeSensors t;
+  Eigen::VectorXd y(9);
+  y << 1.5, -1.0, 0.0, -30.0, 45.0, 25.0, 2.0, -3.0, 1.5;  // sensor 1 is far off
+  ObservedMask observed = ObservedMask::Constant(9, true);
+  observed(7) = false;
+  for (const bool single : {false, true}) {
+    for (const SampleSet& set : {s2kf::ukf_sample_set(3), s2kf::compute_lcd_sample_set(3, 31).set}) {
+      GaussianXd s = t.prior, expected = t.prior;
+      s2kf::UpdateOptions options = t.options();
+      options.single_precision_moments = single;
+      S2kf filter(set);
+      const s2kf::UpdateResult result = filter.update(s, t.model, y, t.r, observed, options);
+      ASSERT_TRUE(result.ok());
+      ASSERT_EQ(filter.rejected_blocks().size(), 1u);
+      EXPECT_EQ(filter.rejected_blocks()[0], 1);
+      EXPECT_EQ(result.observed, 5);
+      ObservedMask kept = observed;
+      kept.segment(3, 3).setConstant(false);
+      kalman_update(expected, t.model.h, y, t.r, kept);
+      const double tolerance = single ? 1e-5 : 1e-10;
+      EXPECT_LT(relative_error(s.mean, expected.mean), tolerance) << set.kind << (single ? " single" : "");
+      EXPECT_LT(relative_error(s.covariance, expected.covariance), tolerance) << set.kind;
+    }
   }
 }
 

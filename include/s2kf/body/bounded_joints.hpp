@@ -27,9 +27,11 @@ namespace s2kf::body {
 /// The map itself, from sin(Theta): (u - l)/2 sin(Theta) + (u + l)/2, clamped to [l, u] once more so
 /// rounding never leaves the range (NaN passes through). Every user of the map calls this one
 /// function (the batched measurement model with sines it computed in bulk).
-inline double bounded_angle_from_sine(double sine, double lower, double upper) {
+template <typename Scalar>
+Scalar bounded_angle_from_sine(Scalar sine, Scalar lower, Scalar upper) {
   if (upper == lower) return lower;
-  const double v = 0.5 * (upper - lower) * sine + 0.5 * (upper + lower);
+  const Scalar half(0.5);
+  const Scalar v = half * (upper - lower) * sine + half * (upper + lower);
   return v < lower ? lower : (v > upper ? upper : v);
 }
 

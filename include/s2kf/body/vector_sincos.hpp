@@ -55,4 +55,41 @@ inline void vector_sincos(const double* x, double* s, double* c, Eigen::Index n)
   }
 }
 
+/// The single-precision version (the tracker's single-precision sample pipeline): Cephes' sinf and
+/// cosf polynomials after a three-part reduction by pi/2 (exact for |x| <= 8192), within about two
+/// units in the last place of float; larger or non-finite arguments take std::sin/std::cos.
+inline void vector_sincos(const float* x, float* s, float* c, Eigen::Index n) {
+  constexpr float kTwoOverPi = 0.636619772367581f;
+  constexpr float kPio2Part1 = 1.5703125f;                // 8 bits: k * part1 is exact
+  constexpr float kPio2Part2 = 4.837512969970703125e-4f;  // next bits
+  constexpr float kPio2Part3 = 7.54978995489188216e-8f;   // the rest
+  constexpr float kRoundMagic = 12582912.0f;              // 1.5 * 2^23: adding it rounds to an integer
+  constexpr float S1 = -1.6666654611e-1f, S2 = 8.3321608736e-3f, S3 = -1.9515295891e-4f;
+  constexpr float C1 = 4.166664568298827e-2f, C2 = -1.388731625493765e-3f, C3 = 2.443315711809948e-5f;
+  constexpr float kLimit = 8192.0f;
+  float large = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const float xi = x[i];
+    const float k = (xi * kTwoOverPi + kRoundMagic) - kRoundMagic;
+    const float r = ((xi - k * kPio2Part1) - k * kPio2Part2) - k * kPio2Part3;  // |r| <= pi/4
+    const float z = r * r;
+    const float sin_r = r + z * r * (S1 + z * (S2 + z * S3));
+    const float cos_r = 1.0f - 0.5f * z + z * z * (C1 + z * (C2 + z * C3));
+    // Quadrant as in the double version: odd swaps sine and cosine, high negates both.
+    const float m = k - 4.0f * ((k * 0.25f - 0.375f + kRoundMagic) - kRoundMagic);
+    const float high = (m * 0.5f - 0.25f + kRoundMagic) - kRoundMagic;
+    const float odd = m - 2.0f * high;
+    const float sign = 1.0f - 2.0f * high;
+    s[i] = sign * ((1.0f - odd) * sin_r + odd * cos_r);
+    c[i] = sign * ((1.0f - odd) * cos_r - odd * sin_r);
+    large += std::abs(xi) <= kLimit ? 0.0f : 1.0f;
+  }
+  if (large == 0) return;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (std::abs(x[i]) <= kLimit) continue;
+    s[i] = static_cast<float>(std::sin(static_cast<double>(x[i])));
+    c[i] = static_cast<float>(std::cos(static_cast<double>(x[i])));
+  }
+}
+
 }  // namespace s2kf::body

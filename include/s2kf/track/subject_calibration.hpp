@@ -334,6 +334,8 @@ class BundleAdjustment {
     const body::FrameTransforms tf = body::joint_frames(model, frame.position, frame.rotation, frame.joints);
     const auto y = recording_.frame(frame.index);
     Eigen::Matrix<double, 3, Eigen::Dynamic> jq(3, n), js(3, scales_);
+    std::vector<int> active;  // the columns of jq a marker moves: the root's and its chain's joints
+    active.reserve(static_cast<std::size_t>(n));
     for (int u : frame.markers) {
       const int m = used_[static_cast<std::size_t>(u)];
       const double w = weight_[static_cast<std::size_t>(u)];
@@ -346,23 +348,31 @@ class BundleAdjustment {
       jq.leftCols<3>().setIdentity();
       const Eigen::Vector3d arm = p - frame.position;
       for (int k = 0; k < 3; ++k) jq.col(3 + k) = frame.rotation.col(k).cross(arm);  // R <- R Exp(omega)
+      active.assign({0, 1, 2, 3, 4, 5});
       for (int f = marker.frame; f > 0; f = model.joints[static_cast<std::size_t>(f - 1)].parent_frame) {
         const body::Joint& joint = model.joints[static_cast<std::size_t>(f - 1)];
         const auto fs = static_cast<std::size_t>(f);
         jq.col(kRoot + f - 1) = tf.rotations[fs].col(static_cast<int>(joint.axis)).cross(p - tf.origins[fs]);
+        active.push_back(kRoot + f - 1);
         const int s = joint_scale_[static_cast<std::size_t>(f - 1)];
         if (s >= 0)
           js.col(s) += tf.rotations[static_cast<std::size_t>(joint.parent_frame)] * joint.translation;
       }
       const Eigen::Matrix3d& ro = tf.rotations[mf];  // d p / d offset
       const int at = scales_ + 3 * u;
-      A.noalias() += w * jq.transpose() * jq;
-      g.noalias() += w * jq.transpose() * r;
-      B.middleCols<3>(at).noalias() += w * jq.transpose() * ro;
+      // A += w jq^T jq, g += w jq^T r, B += w jq^T [js ro] over the active columns only: the
+      // others of jq are exactly zero (a marker moves with the root and its own chain, about 16 of
+      // the 46 columns), so this is the dense product's result at a tenth of its work.
+      for (const int a : active) {
+        const Eigen::Vector3d ja = w * jq.col(a);
+        for (const int b : active) A(b, a) += ja.dot(jq.col(b));
+        g(a) += ja.dot(r);
+        B.block<1, 3>(a, at) += ja.transpose() * ro;
+        if (scales_ > 0) B.row(a).head(scales_) += ja.transpose() * js;
+      }
       h.segment<3>(at).noalias() += w * ro.transpose() * r;
       C.block<3, 3>(at, at).diagonal().array() += w;
       if (scales_ > 0) {
-        B.leftCols(scales_).noalias() += w * jq.transpose() * js;
         C.topLeftCorner(scales_, scales_).noalias() += w * js.transpose() * js;
         C.block(0, at, scales_, 3).noalias() += w * js.transpose() * ro;
         C.block(at, 0, 3, scales_).noalias() += w * ro.transpose() * js;

@@ -205,6 +205,7 @@ S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping, Track
     if (mapping_.point_of_marker[m] >= 0) used_markers_.push_back(m);
   if (used_markers_.empty()) throw std::invalid_argument("no recording label matches a marker of the model");
   measurement_model_.select_markers(used_markers_);
+  measurement_model_.set_single_precision(options_.single_precision_kinematics);  // not the reported markers
   const int n = state_dimension();
   const double dt = 1.0 / rate_hz_;
   const int d = motion_state_dimension();
@@ -314,6 +315,7 @@ S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points
   else
     update_options.block_gate_probability = options_.marker_gate_probability;  // once converged
   update_options.block_size = 3;
+  update_options.single_precision_moments = options_.single_precision_moments;
   ++frames_since_start_;
   estimate_.status = FilterStatus::nothing_observed;
   estimate_.nis = std::numeric_limits<double>::quiet_NaN();

@@ -66,6 +66,17 @@ struct TrackerOptions {
 
   double gate_probability = 0;  ///< 0: off; else reject a whole frame whose NIS is beyond this quantile
 
+  /// Sum the update's sample moments Cyy, Cyx in single precision from deviations formed in double
+  /// (UpdateOptions::single_precision_moments); factorisation, gain and update stay in double.
+  /// A quarter of the rank update's time, with an effect far below the marker noise.
+  bool single_precision_moments = true;
+  /// Forward kinematics of the samples in single precision
+  /// (MarkerMeasurementModel::set_single_precision): another 10 % of the step, but off by default:
+  /// float rounds lab coordinates to about 1e-4 mm, which is not small against the spread of the
+  /// samples along well-determined directions, and it moved the calibrated handstand's accuracy
+  /// figures by more than 1 % (docs/benchmarks.md).
+  bool single_precision_kinematics = false;
+
   /// Per-marker gate: a marker whose innovation is beyond this chi-square quantile (3 degrees of
   /// freedom) of its predicted covariance is left out of the frame's update, so a mislabelled,
   /// swapped or jumping marker does not pull the pose (FrameEstimate::rejected_markers); 0: off.
