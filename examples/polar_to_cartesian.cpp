@@ -1,7 +1,10 @@
 // Estimating a 2-D position from range and bearing with the S2KF: a nonlinear measurement model
 // evaluated for all samples in one call, compared with the UKF-sized set.
 //   ./build/examples/example_polar_to_cartesian
-#include <s2kf/s2kf.hpp>
+#include <s2kf/core/gaussian.hpp>
+#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/core/sample_set.hpp>
+#include <s2kf/core/smart_sampling_kalman_filter.hpp>
 
 #include <cmath>
 #include <cstdio>
