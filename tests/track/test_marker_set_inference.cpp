@@ -182,7 +182,7 @@ TEST(MarkerSetInference, ScrambledBundledRecordingsTrackLikeTheNamedSet) {
     // Segment orientations within 1.4 times, not 1.3: with every marker on its true segment, only
     // the offsets differ (the standing frame's, not the model's), and the calibration carries that
     // difference into the weakly identified axial angles (docs/tracking.md, the gauge analysis).
-    // Measured: the walk's ratio is 1.30 to 1.34 depending on the build's arithmetic.
+    // Measured: the walk's ratio is 1.30 to 1.34, depending on the arithmetic (float or double moments).
     EXPECT_LE(with_inferred.segment_rms_deg, 1.4 * with_names.segment_rms_deg) << name;
   }
 }
