@@ -47,4 +47,19 @@ inline std::vector<std::string> file_names(const std::filesystem::path& dir) {
   return names;
 }
 
+/// The rows of a comma-separated text, each split into its fields (no quoting).
+inline std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::vector<std::string> fields;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) fields.push_back(cell);
+    rows.push_back(fields);
+  }
+  return rows;
+}
+
 }  // namespace s2kf::test_support

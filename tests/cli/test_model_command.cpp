@@ -20,19 +20,7 @@ namespace {
 
 using s2kf::test_support::run_command;
 
-std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream lines(text);
-  std::string line;
-  while (std::getline(lines, line)) {
-    std::vector<std::string> fields;
-    std::istringstream cells(line);
-    std::string cell;
-    while (std::getline(cells, cell, ',')) fields.push_back(cell);
-    rows.push_back(fields);
-  }
-  return rows;
-}
+using s2kf::test_support::csv_rows;
 
 std::string scratch(const std::string& name) {
   std::filesystem::create_directories(S2KF_TEST_TMP_DIR);
@@ -44,7 +32,7 @@ TEST(CommandModel, PrintsFiftyZeroPoseMarkersScaledToTheHeight) {
     const s2kf::test_support::CommandResult result =
         run_command(height == 1750.0 ? "model" : "model --height 1000");
     ASSERT_EQ(result.status, 0) << result.output;
-    const auto rows = parse_csv(result.output);
+    const auto rows = csv_rows(result.output);
     ASSERT_EQ(rows.size(), 51u);
     EXPECT_EQ(rows[0], (std::vector<std::string>{"marker", "x", "y", "z"}));
     for (int m = 0; m < 50; ++m) {
@@ -61,7 +49,7 @@ TEST(CommandModel, PrintsFiftyZeroPoseMarkersScaledToTheHeight) {
 TEST(CommandModel, JointsFlagPrintsTheJointTable) {
   const s2kf::test_support::CommandResult result = run_command("model --joints --height 1000");
   ASSERT_EQ(result.status, 0) << result.output;
-  const auto rows = parse_csv(result.output);
+  const auto rows = csv_rows(result.output);
   ASSERT_EQ(rows.size(), 41u);
   EXPECT_EQ(rows[0][0], "joint");
   EXPECT_EQ(rows[1][0], "BPx");
@@ -97,7 +85,7 @@ TEST(CommandModel, JsonAndCsvPosesGiveTheSameMarkers) {
   EXPECT_EQ(from_json.output, from_csv.output);
   EXPECT_NE(from_json.output, run_command("model").output);
   // Root-only check on a marker of the pelvis: L3 = r + R * L3_local.
-  const auto rows = parse_csv(from_json.output);
+  const auto rows = csv_rows(from_json.output);
   EXPECT_EQ(rows[9][0], "L3");
 }
 

@@ -4,6 +4,8 @@
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/sim/subject.hpp>
 
+#include "cli_runner.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -20,22 +22,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int status;
-  std::string output;
-};
+using s2kf::test_support::CommandResult;
 
-CommandResult run_cli(const std::string& arguments) {
-  fs::create_directories(S2KF_TEST_TMP_DIR);
-  // One log per test: ctest runs the tests of this program in parallel processes.
-  const std::string log = std::string(S2KF_TEST_TMP_DIR) + "/simulate_output_" +
-                          ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".txt";
-  const std::string command = std::string("\"") + S2KF_CLI + "\" " + arguments + " > \"" + log + "\" 2>&1";
-  const int raw = std::system(command.c_str());
-  std::ifstream in(log);
-  std::string output((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return {WEXITSTATUS(raw), output};
-}
+CommandResult run_cli(const std::string& arguments) { return s2kf::test_support::run_command(arguments); }
 
 std::string read_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -45,17 +34,7 @@ std::string read_bytes(const std::string& path) {
 std::string out_path(const std::string& name) { return std::string(S2KF_TEST_TMP_DIR) + "/" + name; }
 
 std::vector<std::vector<std::string>> read_csv(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::vector<std::string>> rows;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::stringstream fields(line);
-    std::string cell;
-    while (std::getline(fields, cell, ',')) cells.push_back(cell);
-    rows.push_back(cells);
-  }
-  return rows;
+  return s2kf::test_support::csv_rows(s2kf::test_support::read_text(path));
 }
 
 TEST(SimulateCommand, ListNamesTheBundledMotions) {
