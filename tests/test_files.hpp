@@ -30,6 +30,17 @@ inline std::filesystem::path empty_scratch(const std::string& name) {
   return dir;
 }
 
+/// Frames of the bundled recordings data/walk.c3d and data/handstand.c3d.
+inline constexpr std::size_t kWalkFrames = 551, kHandstandFrames = 675;
+
+/// The lines of a text, without their line ends.
+inline std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
 /// The whole text of a file ("" when it cannot be read).
 inline std::string read_text(const std::filesystem::path& path) {
   std::ifstream in(path);

@@ -5,6 +5,7 @@
 // uncalibrated at 93 samples (about half a second each) unless a test needs the calibration.
 #include "../cli_runner.hpp"
 #include "motion_test_support.hpp"
+#include "test_files.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -30,20 +31,15 @@ using test_support::run_command;
 using test_support::scratch_directory;
 
 const std::string kFast = " --no-calibrate --samples 93 --quiet";
-constexpr std::size_t kWalkFrames = 551, kHandstandFrames = 675;
+using test_support::kHandstandFrames;
+using test_support::kWalkFrames;
+using test_support::lines_of;
 
 std::string data(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
 
 void copy_into(const std::string& from, const std::string& to) {
   fs::create_directories(fs::path(to).parent_path());
   fs::copy_file(from, to, fs::copy_options::overwrite_existing);
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
 }
 
 /// Every file below `dir`, as paths relative to it.

@@ -4,6 +4,7 @@
 // refused before anything is written. Runs data/handstand.c3d uncalibrated at 93 samples (about 0.5 s).
 #include "../cli_runner.hpp"
 #include "motion_test_support.hpp"
+#include "test_files.hpp"
 
 #include <gtest/gtest.h>
 
@@ -27,7 +28,8 @@ using test_support::scratch_directory;
 
 const std::string kFastTrack =
     "track " + std::string(S2KF_DATA_DIR) + "/handstand.c3d --no-calibrate --samples 93 --quiet";
-constexpr int kHandstandFrames = 675;
+using test_support::kHandstandFrames;
+using test_support::lines_of;
 
 std::set<std::string> file_names_in(const std::string& dir) {
   std::set<std::string> names;
@@ -35,13 +37,6 @@ std::set<std::string> file_names_in(const std::string& dir) {
   for (const auto& entry : fs::recursive_directory_iterator(dir))
     names.insert(entry.path().filename().string());
   return names;
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
 }
 
 /// The numbers of every OFFSET line of a BVH, in file order.

@@ -36,19 +36,15 @@ namespace {
 using namespace s2kf;
 namespace fs = std::filesystem;
 
-body::MarkerSet bundled(const std::string& name) {
-  return cli::load_marker_set(fs::path(S2KF_DATA_DIR) / "markersets" / (name + ".json"));
-}
-
-struct Simulated {
+struct SetRecording {
   sim::Recording recording;
   io::MotionTable truth;
 };
 
 /// A subject wearing `set` (the set's markers, then placement and segment-length errors) doing a
 /// random sweep of every joint, 400 frames at 100 Hz.
-Simulated simulate_with(const body::MarkerSet& set, std::uint64_t seed,
-                        const std::vector<sim::SegmentDropout>& dropouts = {}) {
+SetRecording simulate_with(const body::MarkerSet& set, std::uint64_t seed,
+                           const std::vector<sim::SegmentDropout>& dropouts = {}) {
   const body::BodyModel wearing = body::apply_marker_set(body::mmm_body_model(1000), set);
   sim::SubjectOptions options;  // defaults: placement 8 mm, segment scale 3 %, noise 0.5 mm
   options.height_mm = 1750;
@@ -59,7 +55,7 @@ Simulated simulate_with(const body::MarkerSet& set, std::uint64_t seed,
   sim::RecordingOptions recording_options;
   recording_options.frames = 400;
   recording_options.segment_dropouts = dropouts;
-  Simulated s;
+  SetRecording s;
   s.recording = sim::simulate_recording(motion, subject, recording_options, seed);
   s.truth.joint_names = subject.joint_names;
   s.truth.values.resize(s.recording.frames(), body::kRootValues + wearing.joint_count());
@@ -78,7 +74,7 @@ struct Tracked {
   std::vector<Eigen::VectorXd> last_uncertainty;  // segment_uncertainty_deg of the last frame
 };
 
-Tracked track_simulated(const Simulated& s, const body::MarkerSet& set) {
+Tracked track_simulated(const SetRecording& s, const body::MarkerSet& set) {
   SequenceFrameSource source(s.recording);
   track::SessionOptions options;
   options.tracker = track::preset_options("default", 100.0);
@@ -120,7 +116,7 @@ TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
   const body::FrameTransforms zero = body::joint_frames(
       base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::VectorXd::Zero(base.joint_count()));
   for (const std::string& name : names) {
-    const body::MarkerSet set = bundled(name);
+    const body::MarkerSet set = cli::resolve_marker_set(name);
     EXPECT_NE(set.description.find("Source: "), std::string::npos)
         << name << ": the description names no source";
     const body::BodyModel model = body::apply_marker_set(base, set);
@@ -153,8 +149,8 @@ TEST(BundledMarkerSets, EachTracksASimulatedRecordingOfItsOwnMarkers) {
   S2KF_SKIP_UNDER_SANITIZERS();
   for (const char* name : {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation",
                            "qualisys_sports", "plugin_gait"}) {
-    const body::MarkerSet set = bundled(name);
-    const Simulated s = simulate_with(set, 5);
+    const body::MarkerSet set = cli::resolve_marker_set(name);
+    const SetRecording s = simulate_with(set, 5);
     const Tracked t = track_simulated(s, set);
     EXPECT_EQ(t.session.markers_used(), static_cast<int>(set.entries.size())) << name;
     EXPECT_TRUE(t.session.segments.unobserved_joints.empty()) << name;
@@ -169,10 +165,10 @@ TEST(BundledMarkerSets, EachTracksASimulatedRecordingOfItsOwnMarkers) {
 }
 
 TEST(PartialMarkerSets, LowerBodyRecordingWritesTheUpperBodyAsNotObserved) {
-  const body::MarkerSet set = bundled("plugin_gait_lower");
-  const Simulated s = simulate_with(set, 9);
+  const body::MarkerSet set = cli::resolve_marker_set("plugin_gait_lower");
+  const SetRecording s = simulate_with(set, 9);
   // The automatic choice takes the lower-body set, not the full one it is half of.
-  const std::vector<body::MarkerSet> sets{bundled("plugin_gait"), set};
+  const std::vector<body::MarkerSet> sets{cli::resolve_marker_set("plugin_gait"), set};
   EXPECT_EQ(track::choose_marker_set(s.recording.labels, sets), 1);
   const Tracked t = track_simulated(s, set);
   EXPECT_EQ(t.session.segments.unobserved_segments(),
@@ -208,8 +204,8 @@ TEST(PartialMarkerSets, LowerBodyRecordingWritesTheUpperBodyAsNotObserved) {
 
 TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const body::MarkerSet set = bundled("plugin_gait_upper");
-  const Simulated s = simulate_with(set, 13);
+  const body::MarkerSet set = cli::resolve_marker_set("plugin_gait_upper");
+  const SetRecording s = simulate_with(set, 13);
   const Tracked t = track_simulated(s, set);
   EXPECT_EQ(t.session.segments.unobserved_segments(),
             (std::vector<std::string>{"LH", "LK", "LA", "RH", "RK", "RA"}));
@@ -225,8 +221,8 @@ TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
 
 TEST(PartialMarkerSets, CountsFramesWithoutAVisibleMarkerPerSegment) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const body::MarkerSet set = bundled("plugin_gait_lower");
-  const Simulated s = simulate_with(set, 21, {sim::SegmentDropout{"LA", 1.0, 0.5}});
+  const body::MarkerSet set = cli::resolve_marker_set("plugin_gait_lower");
+  const SetRecording s = simulate_with(set, 21, {sim::SegmentDropout{"LA", 1.0, 0.5}});
   const Tracked t = track_simulated(s, set);
   const track::SegmentObservation& seen = t.run.segments;
   EXPECT_EQ(seen.frames, 400);
@@ -244,7 +240,7 @@ TEST(PartialMarkerSets, PelvisOnlyIsRefused) {
     entry.like = label;
     pelvis.entries.push_back(entry);
   }
-  const Simulated s = simulate_with(pelvis, 3);
+  const SetRecording s = simulate_with(pelvis, 3);
   SequenceFrameSource source(s.recording);
   track::SessionOptions options;
   try {

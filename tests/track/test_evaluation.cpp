@@ -18,6 +18,7 @@
 #include <s2kf/track/truth_metrics.hpp>
 
 #include "../../examples/s2kf/motion_json.hpp"
+#include "test_files.hpp"
 
 #include "tracked_recording.hpp"
 #include "tracker_samples.hpp"
@@ -41,8 +42,6 @@ namespace fs = std::filesystem;
 using namespace test_support;
 
 constexpr double kDegrees = 180.0 / 3.14159265358979323846;
-
-std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
 
 /// A handstand played on a subject exactly like the model (no segment scaling, placement, soft
 /// tissue or noise): the markers are the model's markers at the truth.

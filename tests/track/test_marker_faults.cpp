@@ -2,6 +2,7 @@
 // a stuck marker, two labels swapped for a while, and ghost jumps. The tracker's per-marker gate
 // (an innovation improbable under the marker's predicted covariance) and its frozen-marker check
 // must find them, leave them out, count them, and keep the pose close to the clean recording's.
+#include "test_files.hpp"
 #include "tracker_samples.hpp"
 
 #include <s2kf/core/constants.hpp>
@@ -22,10 +23,10 @@ namespace {
 
 using namespace s2kf;
 
-constexpr Eigen::Index kFrames = 400;
+constexpr Eigen::Index kRecordingFrames = 400;
 constexpr long kWarmup = 20;
 
-std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
+using test_support::data_file;
 
 struct Outcome {
   track::TruthComparison truth;
@@ -34,7 +35,7 @@ struct Outcome {
 };
 
 struct Walk {
-  MarkerSequence clean = c3d::read_c3d(data_file("walk.c3d")).frames(0, kFrames);
+  MarkerSequence clean = c3d::read_c3d(data_file("walk.c3d")).frames(0, kRecordingFrames);
   io::MotionTable truth = io::load_motion_csv(data_file("walk_truth.csv"));
   double height_mm = 0;
 
@@ -93,7 +94,7 @@ TEST(MarkerFaults, CleanRecordingLosesNothingToTheGate) {
   const Outcome open = walk.track(walk.clean, false);
   report("none", guarded, guarded, open);
   // Hardly any of the 400 x 50 marker observations is left out, and the pose is unchanged.
-  EXPECT_LT(total(guarded.run.rejected_by_innovation), kFrames * 50 / 200);
+  EXPECT_LT(total(guarded.run.rejected_by_innovation), kRecordingFrames * 50 / 200);
   EXPECT_EQ(total(guarded.run.rejected_as_frozen), 0);
   EXPECT_LT(guarded.truth.segment_orientation_rms_deg, open.truth.segment_orientation_rms_deg * 1.05 + 0.1);
 }
@@ -104,13 +105,13 @@ TEST(MarkerFaults, AStuckWristMarkerIsLeftOutAsFrozen) {
   const Outcome clean = walk.track(walk.clean, true);
   MarkerSequence stuck = walk.clean;
   const Eigen::Index p = walk.point("RWTS");
-  for (Eigen::Index f = 100; f < kFrames; ++f)
+  for (Eigen::Index f = 100; f < kRecordingFrames; ++f)
     stuck.positions.block<3, 1>(3 * p, f) = stuck.positions.block<3, 1>(3 * p, 100);
   const Outcome guarded = walk.track(stuck, true);
   const Outcome open = walk.track(stuck, false);
   // Frozen from frame 110 on (0.1 s at 100 Hz): every later frame is left out.
   report("stuck wrist marker", clean, guarded, open);
-  EXPECT_GE(walk.rejected(guarded, "RWTS", true), kFrames - 112);
+  EXPECT_GE(walk.rejected(guarded, "RWTS", true), kRecordingFrames - 112);
   EXPECT_LT(guarded.truth.segment_orientation_rms_deg, clean.truth.segment_orientation_rms_deg * 1.2 + 0.3);
   EXPECT_GT(open.truth.segment_orientation_rms_deg, guarded.truth.segment_orientation_rms_deg);
 }
@@ -139,7 +140,7 @@ TEST(MarkerFaults, GhostJumpsAreLeftOut) {
   MarkerSequence ghosts = walk.clean;
   const Eigen::Index p = walk.point("LANK");
   long jumps = 0;
-  for (Eigen::Index f = 50; f < kFrames; f += 25, ++jumps) ghosts.positions(3 * p + 2, f) += 300.0;
+  for (Eigen::Index f = 50; f < kRecordingFrames; f += 25, ++jumps) ghosts.positions(3 * p + 2, f) += 300.0;
   const Outcome guarded = walk.track(ghosts, true);
   report("ghost jumps of 300 mm", clean, guarded, walk.track(ghosts, false));
   EXPECT_EQ(walk.rejected(guarded, "LANK", false), jumps);
@@ -181,6 +182,6 @@ TEST(UnobservableTwists, ATinyInputChangeMakesATinyChange) {
     return reference.run.motion.values.col(6 +
                                            (std::find(joints.begin(), joints.end(), name) - joints.begin()));
   };
-  const double split = (column("BPz") - column("BTz")).cwiseAbs().tail(kFrames - kWarmup).maxCoeff();
+  const double split = (column("BPz") - column("BTz")).cwiseAbs().tail(kRecordingFrames - kWarmup).maxCoeff();
   EXPECT_LT(split * kDegreesPerRadian, 10.0);
 }

@@ -22,10 +22,6 @@ namespace {
 using namespace s2kf;
 namespace fs = std::filesystem;
 
-body::MarkerSet bundled(const std::string& name) {
-  return cli::load_marker_set(fs::path(S2KF_DATA_DIR) / "markersets" / (name + ".json"));
-}
-
 std::vector<std::string> labels_of(const std::string& file) {
   c3d::C3dReader reader(std::string(S2KF_C3D_DATA_DIR) + "/" + file);
   std::vector<std::string> labels;
@@ -96,7 +92,7 @@ TEST(MarkerSet, AppliedSetPutsMarkersWhereTheSetSays) {
 
 TEST(MarkerSet, KitSetReproducesTheModel) {
   const body::BodyModel base = body::mmm_body_model(1750);
-  const body::BodyModel model = body::apply_marker_set(base, bundled("kit"));
+  const body::BodyModel model = body::apply_marker_set(base, cli::resolve_marker_set("kit"));
   ASSERT_EQ(model.marker_count(), base.marker_count());
   for (int m = 0; m < model.marker_count(); ++m) {
     EXPECT_EQ(model.markers[m].name, base.markers[m].name);
@@ -115,14 +111,15 @@ TEST(MarkerSet, KitSetReproducesTheModel) {
 TEST(MarkerSet, WarnsAboutSegmentsWithOneMarker) {
   const body::BodyModel base = body::mmm_body_model(1000);
   const std::vector<std::string> warnings =
-      body::marker_set_warnings(base, body::apply_marker_set(base, bundled("cmu")));
+      body::marker_set_warnings(base, body::apply_marker_set(base, cli::resolve_marker_set("cmu")));
   bool lw = false;
   for (const auto& w : warnings) lw = lw || w.rfind("LW has 1 marker", 0) == 0;
   EXPECT_TRUE(lw);
 }
 
 TEST(MarkerSet, AutomaticChoiceFitsTheLab) {
-  const std::vector<body::MarkerSet> sets{bundled("kit"), bundled("cmu"), bundled("plugin_gait")};
+  const std::vector<body::MarkerSet> sets{cli::resolve_marker_set("kit"), cli::resolve_marker_set("cmu"),
+                                          cli::resolve_marker_set("plugin_gait")};
   EXPECT_EQ(track::choose_marker_set(labels_of("85_02.c3d"), sets), 1);
   EXPECT_EQ(track::choose_marker_set(labels_of("HDM_mm_01-02_03_120.c3d"), sets), 1);
   EXPECT_EQ(track::choose_marker_set(labels_of("PiG_Motion-FlatFoot-One.c3d"), sets), 2);
@@ -142,7 +139,7 @@ TEST(MarkerSet, AutomaticChoiceFitsTheLab) {
 }
 
 TEST(MarkerSet, JsonRoundTrip) {
-  const body::MarkerSet set = bundled("plugin_gait");
+  const body::MarkerSet set = cli::resolve_marker_set("plugin_gait");
   const body::MarkerSet again = cli::marker_set_from_json(cli::marker_set_to_json(set), "again");
   const body::BodyModel base = body::mmm_body_model(1000);
   const body::BodyModel a = body::apply_marker_set(base, set), b = body::apply_marker_set(base, again);

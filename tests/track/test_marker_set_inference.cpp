@@ -3,6 +3,7 @@
 // distance and joint error against the truth; recordings whose markers cannot be placed
 // unambiguously are refused with a sentence that says why.
 #include "address_sanitizer.hpp"
+#include "test_files.hpp"
 #include "tracker_samples.hpp"
 
 #include "../../examples/s2kf/marker_set_json.hpp"
@@ -37,7 +38,7 @@ namespace {
 
 using namespace s2kf;
 
-std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
+using test_support::data_file;
 
 constexpr int kSamples = 101;
 

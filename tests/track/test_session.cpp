@@ -1,6 +1,7 @@
 // The tracking pipeline (track/session.hpp): a session prepared from a C3D file streamed frame by
 // frame equals one prepared from the same recording in memory, rows handed to a sink equal the
 // kept table, and bad recordings are refused with a sentence before any tracking.
+#include "test_files.hpp"
 #include "tracker_samples.hpp"
 
 #include <s2kf/io/c3d_frame_source.hpp>
@@ -18,7 +19,7 @@ namespace {
 
 using namespace s2kf;
 
-std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
+using test_support::data_file;
 
 body::MarkerSet kit_like_set() { return body::model_marker_set(body::mmm_body_model(1000)); }
 
