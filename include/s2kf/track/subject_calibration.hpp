@@ -31,6 +31,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace s2kf::track {
@@ -156,7 +157,8 @@ inline std::vector<std::string> scalable_segments(const body::BodyModel& model) 
 inline constexpr int kCalibrationChunks = 8;
 
 /// Calls work(c) for c = 0 .. count - 1, on up to `threads` threads (the calling one included;
-/// thread t takes c = t, t + threads, ...). The first exception thrown is rethrown here.
+/// thread t takes c = t, t + threads, ...). An exception thrown by work stops that thread's
+/// chunks and is rethrown here once all threads are done.
 template <class Work>
 void for_each_chunk(int count, int threads, const Work& work) {
   threads = std::clamp(threads, 1, std::max(count, 1));
