@@ -12,12 +12,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <thread>
 
 namespace s2kf::cli {
 namespace {
@@ -57,6 +59,7 @@ void run_calibrate(const CalibrateSettings& settings) {
   options.calibration_frames = settings.frames;
   options.calibration.iterations = settings.iterations;
   options.calibration.final_pass = true;
+  options.calibration.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   options.calibration.estimate_segment_scales = !settings.no_scales;
   track::Session session;
   try {

@@ -58,6 +58,7 @@ struct TrackSettings {
   std::string subject;    // a calibrated subject file (s2kf calibrate)
   bool calibrate = true;  // calibrate the subject on the recording first (not with --subject)
   int calibration_frames = 1200;
+  int calibration_threads = 1;  // set by run_track: every core for one recording, 1 in a batch
   bool smooth = false;
   long figure_frame = -1;  // >= 0: draw this frame
   std::string truth;       // a ground-truth motion CSV (simulated recordings): accuracy in the summary
@@ -149,6 +150,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   session_options.height_mm = settings.height_mm;
   session_options.calibrate = settings.calibrate && settings.subject.empty();
   session_options.calibration_frames = settings.calibration_frames;
+  session_options.calibration.threads = settings.calibration_threads;
   const SampleSet samples = cached_sample_set(46, session_options.tracker.samples);
   track::Session session;
   try {
@@ -332,7 +334,9 @@ void run_track(const TrackSettings& settings) {
   if (!batch) {
     if (fs::path(prefixes[0]).has_parent_path()) fs::create_directories(fs::path(prefixes[0]).parent_path());
     const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
-    const TrackOutcome outcome = track_file(todo[0].input, prefixes[0], settings, terminal);
+    TrackSettings one = settings;  // one recording: its calibration may take every core
+    one.calibration_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    const TrackOutcome outcome = track_file(todo[0].input, prefixes[0], one, terminal);
     if (!settings.quiet) std::cout << outcome.paragraph << "\n";
     return;
   }

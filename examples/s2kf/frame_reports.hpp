@@ -4,6 +4,7 @@
 /// posterior standard deviation).
 #pragma once
 
+#include <s2kf/io/number_text.hpp>
 #include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/session.hpp>
 
@@ -21,9 +22,11 @@ inline void write_marker_report_header(std::ostream& out) {
   out << "frame,time,mean_marker_distance_mm,visible_markers\n";
 }
 inline void write_marker_report_row(std::ostream& out, const track::TrackedFrame& f) {
-  out << std::setprecision(9) << f.frame << "," << f.time << ",";
+  out << std::setprecision(9) << f.frame << ",";
+  io::write_general(out, f.time, 9);
+  out << ",";
   if (std::isfinite(f.mean_marker_distance))
-    out << f.mean_marker_distance;
+    io::write_general(out, f.mean_marker_distance, 9);
   else
     out << "nan";
   out << "," << f.visible_markers << "\n";
@@ -44,12 +47,14 @@ inline void write_segment_report_row(std::ostream& out, const track::Session& se
   if (f.estimate && f.estimate->tracked)
     sd = track::segment_uncertainty_deg(session.model, session.segments, f.estimate->pose.joints,
                                         f.estimate->covariance);
-  out << std::setprecision(6) << f.frame << "," << f.time;
+  out << std::setprecision(6) << f.frame << ",";
+  io::write_general(out, f.time, 6);
   for (Eigen::Index s = 0; s < sd.size(); ++s) {
+    out << ",";
     if (std::isfinite(sd(s)))
-      out << "," << sd(s);
+      io::write_general(out, sd(s), 6);
     else
-      out << ",nan";
+      out << "nan";
   }
   out << "\n";
 }

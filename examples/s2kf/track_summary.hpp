@@ -54,7 +54,9 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
         {"stretches", session.calibration_stretches},
         {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
         {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
-        {"segment_scale", session.calibration->segment_scale}};
+        {"segment_scale", session.calibration->segment_scale},
+        {"bundle_frames", session.calibration->passes.front().frames_used},
+        {"bundle_iterations", session.calibration->passes.front().bundle_iterations}};
   std::vector<double> latency_ms = run.seconds;
   for (double& s : latency_ms) s *= 1000;
   // Per marker the tracker left out at least once: how often, and why (MarkerRejection).

@@ -41,6 +41,7 @@
 #include <s2kf/io/motion_derivatives.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
+#include <s2kf/io/number_text.hpp>
 #include <s2kf/io/opensim_model.hpp>
 #include <s2kf/io/trc_file.hpp>
 

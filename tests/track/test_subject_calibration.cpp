@@ -18,6 +18,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -262,6 +263,48 @@ TEST(SubjectCalibration, RejectsInputsThatCannotBeCalibrated) {
   track::MarkerMapping short_mapping = mapping;
   short_mapping.point_of_marker.pop_back();
   EXPECT_THROW(track::calibrate_subject(model, short_mapping, fast_options(), one, samples),
+               std::invalid_argument);
+}
+
+// Threads split the tracking pass by stretch and the bundle adjustment's frames into fixed chunks
+// whose sums are added in chunk order: the calibrated subject must be the same to the last bit
+// with one thread and with three (a count that divides neither the 2 stretches nor the 8 chunks).
+TEST(SubjectCalibration, ResultDoesNotDependOnTheThreadCount) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const Synthetic s = make_synthetic(300, 8.0, 5);
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const track::MarkerMapping mapping = track::map_markers(s.recording.labels, model.marker_names());
+  track::CalibrationOptions options;
+  options.final_pass = false;
+  options.restart_frames = {150};
+  options.threads = 1;
+  const track::SubjectCalibration one = track::calibrate_subject(
+      model, mapping, fast_options(), s.recording, test::tracker_samples(fast_options()), options);
+  options.threads = 3;
+  const track::SubjectCalibration three = track::calibrate_subject(
+      model, mapping, fast_options(), s.recording, test::tracker_samples(fast_options()), options);
+  ASSERT_EQ(one.passes.size(), three.passes.size());
+  EXPECT_GT(one.passes.front().bundle_iterations, 1);
+  EXPECT_EQ(one.passes.front().bundle_iterations, three.passes.front().bundle_iterations);
+  EXPECT_EQ(one.passes.front().frames_used, three.passes.front().frames_used);
+  EXPECT_EQ(one.mean_marker_distance_before_mm, three.mean_marker_distance_before_mm);
+  EXPECT_EQ(one.passes.front().rms_after_mm, three.passes.front().rms_after_mm);
+  for (int m = 0; m < model.marker_count(); ++m)
+    EXPECT_EQ(one.model.markers[static_cast<std::size_t>(m)].offset,
+              three.model.markers[static_cast<std::size_t>(m)].offset);
+  for (int j = 0; j < model.joint_count(); ++j)
+    EXPECT_EQ(one.model.joints[static_cast<std::size_t>(j)].translation,
+              three.model.joints[static_cast<std::size_t>(j)].translation);
+  // ... and it moved the subject (the comparison is not between two untouched models).
+  double moved = 0;
+  for (int m = 0; m < model.marker_count(); ++m)
+    moved = std::max(moved, (one.model.markers[static_cast<std::size_t>(m)].offset -
+                             model.markers[static_cast<std::size_t>(m)].offset)
+                                .norm());
+  EXPECT_GT(moved, 1.0);
+  options.threads = 0;
+  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), s.recording,
+                                        test::tracker_samples(fast_options()), options),
                std::invalid_argument);
 }
 

@@ -7,6 +7,7 @@
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/io/number_text.hpp>
 
 #include <Eigen/Core>
 
@@ -121,8 +122,13 @@ class BvhSkeleton {
   void write_row(std::ostream& out, const MotionRowRef& values) const {
     const double degrees = kDegreesPerRadian;
     const Eigen::Vector3d position = to_bvh(values.head<3>());
-    out << std::fixed << std::setprecision(6) << position.x() << " " << position.y() << " " << position.z()
-        << " " << values(5) * degrees << " " << -values(4) * degrees << " " << values(3) * degrees;
+    out << std::fixed << std::setprecision(6);
+    const double root[6] = {position.x(),        position.y(),         position.z(),
+                            values(5) * degrees, -values(4) * degrees, values(3) * degrees};
+    for (int k = 0; k < 6; ++k) {
+      if (k) out << " ";
+      write_fixed(out, root[k], 6);
+    }
     for (int g : order_) {
       double channel[3] = {0, 0, 0};  // X, Y, Z
       for (int j : groups_[g].dofs) {
@@ -139,7 +145,10 @@ class BvhSkeleton {
             break;
         }
       }
-      out << " " << channel[0] << " " << channel[1] << " " << channel[2];
+      for (const double value : channel) {
+        out << " ";
+        write_fixed(out, value, 6);
+      }
     }
     out << "\n";
   }

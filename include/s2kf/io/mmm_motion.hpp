@@ -6,6 +6,7 @@
 
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/io/number_text.hpp>
 
 #include <Eigen/Core>
 
@@ -45,12 +46,15 @@ inline void write_mmm_header(std::ostream& out, const std::string& motion_name, 
 
 /// One ModelPose measurement: root position (mm) and roll, pitch, yaw (rad, R = Rz Ry Rx).
 inline void write_mmm_model_pose(std::ostream& out, double time_s, const MotionRowRef& values) {
-  out << std::setprecision(9) << "          <Measurement timestep=\"" << time_s << "\">\n"
-      << "            <RootPosition>" << values(0) << " " << values(1) << " " << values(2)
-      << "</RootPosition>\n"
-      << "            <RootRotation>" << values(3) << " " << values(4) << " " << values(5)
-      << "</RootRotation>\n"
-      << "          </Measurement>\n";
+  out << std::setprecision(9) << "          <Measurement timestep=\"";
+  write_general(out, time_s, 9);
+  out << "\">\n            <RootPosition>";
+  for (int k = 0; k < 6; ++k) {
+    if (k == 3) out << "</RootPosition>\n            <RootRotation>";
+    if (k % 3) out << " ";
+    write_general(out, values(k), 9);
+  }
+  out << "</RootRotation>\n          </Measurement>\n";
 }
 
 /// Closes the ModelPose sensor and opens the Kinematic sensor with its joint list.
@@ -67,9 +71,13 @@ inline void write_mmm_kinematic_header(std::ostream& out, const std::vector<std:
 
 /// One Kinematic measurement: the joint angles (rad) in the configuration's order.
 inline void write_mmm_joint_position(std::ostream& out, double time_s, const MotionRowRef& values) {
-  out << std::setprecision(9) << "          <Measurement timestep=\"" << time_s << "\">\n"
-      << "            <JointPosition>";
-  for (Eigen::Index c = 6; c < values.size(); ++c) out << (c > 6 ? " " : "") << angle_or_zero(values(c));
+  out << std::setprecision(9) << "          <Measurement timestep=\"";
+  write_general(out, time_s, 9);
+  out << "\">\n            <JointPosition>";
+  for (Eigen::Index c = 6; c < values.size(); ++c) {
+    if (c > 6) out << " ";
+    write_general(out, angle_or_zero(values(c)), 9);
+  }
   out << "</JointPosition>\n"
       << "          </Measurement>\n";
 }

@@ -6,6 +6,7 @@
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
+#include <s2kf/io/number_text.hpp>
 
 #include <Eigen/Core>
 
@@ -68,12 +69,13 @@ inline void write_motion_csv_header(std::ostream& out, const std::vector<std::st
 
 /// One CSV line of write_motion_csv: frame, time and the values with %.9g, non-finite ones as "nan".
 inline void write_motion_csv_row(std::ostream& out, long frame, double time, const MotionRowRef& values) {
-  out << std::setprecision(9) << frame << "," << time;
+  out << std::setprecision(9) << frame << ",";
+  write_general(out, time, 9);
   for (Eigen::Index c = 0; c < values.size(); ++c) {
     const double v = values(c);
     out << ",";
     if (std::isfinite(v))
-      out << v;
+      write_general(out, v, 9);
     else
       out << "nan";
   }
@@ -104,9 +106,12 @@ inline void write_opensim_mot_header(std::ostream& out, const std::string& name,
 /// degrees, tab-separated, %.9g.
 inline void write_opensim_mot_row(std::ostream& out, double time, const MotionRowRef& values) {
   const double degrees = kDegreesPerRadian;
-  out << std::setprecision(9) << time;
-  for (Eigen::Index c = 0; c < values.size(); ++c)
-    out << "\t" << angle_or_zero(values(c)) * (c < 3 ? 0.001 : degrees);
+  out << std::setprecision(9);
+  write_general(out, time, 9);
+  for (Eigen::Index c = 0; c < values.size(); ++c) {
+    out << "\t";
+    write_general(out, angle_or_zero(values(c)) * (c < 3 ? 0.001 : degrees), 9);
+  }
   out << "\n";
 }
 

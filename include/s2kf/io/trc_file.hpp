@@ -3,6 +3,7 @@
 /// Kinematics and Scale tools), in the same ground frame as the .osim of opensim_model.hpp.
 #pragma once
 
+#include <s2kf/io/number_text.hpp>
 #include <s2kf/io/opensim_model.hpp>
 
 #include <Eigen/Core>
@@ -42,14 +43,18 @@ inline void write_trc_header(std::ostream& out, const std::string& file_name, do
 inline void write_trc_row(std::ostream& out, long frame_number, double time_s,
                           const Eigen::Ref<const Eigen::Matrix3Xd>& lab_positions_mm) {
   const Eigen::Matrix3d ground_from_lab = opensim_ground_from_lab();
-  out << frame_number << "\t" << std::setprecision(9) << time_s;
+  out << frame_number << "\t" << std::setprecision(10);
+  write_general(out, time_s, 9);
   for (Eigen::Index m = 0; m < lab_positions_mm.cols(); ++m) {
     if (!lab_positions_mm.col(m).allFinite()) {
       out << "\t\t\t";
       continue;
     }
     const Eigen::Vector3d ground = ground_from_lab * lab_positions_mm.col(m);
-    out << std::setprecision(10) << "\t" << ground.x() << "\t" << ground.y() << "\t" << ground.z();
+    for (int k = 0; k < 3; ++k) {
+      out << "\t";
+      write_general(out, ground(k), 10);
+    }
   }
   out << "\n";
 }
