@@ -1,0 +1,150 @@
+/// @file
+/// Checking and repairing which segment each marker of an inferred marker set rides on, from the
+/// recording's own distances (rigid_clusters.hpp): markers on one segment keep their mutual
+/// distances, markers on two segments that turn against each other do not. A marker whose distances
+/// to its segment's other markers vary by centimetres while those to another segment's markers stay
+/// constant rides on that other segment: a thigh marker put on the hand that hung beside it in the
+/// template frame, a wrist marker put on the thigh.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_set.hpp>
+#include <s2kf/track/rigid_clusters.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace s2kf::track {
+
+struct SegmentRigidityOptions {
+  /// A marker leaves its segment only where the median SD of its distances to the segment's other
+  /// markers exceeds this: centimetres, beyond soft tissue (8 mm per marker on the simulated
+  /// subjects, about 11 mm on a distance between two of them) ...
+  double misfit_sd_mm = 20.0;
+  /// ... and the median SD to the markers of another segment is below this fraction of it.
+  double move_ratio = 0.5;
+};
+
+/// How rigidly one marker rides with the markers of its segment and of the best other segment.
+struct MarkerRigidity {
+  std::string segment;  ///< the segment it is assigned to
+  /// Median over the segment's other markers of the SD of the distance to them (mm); NaN where the
+  /// segment has no other marker seen with it often enough: nothing to check it against.
+  double own_sd_mm = std::numeric_limits<double>::quiet_NaN();
+  std::string best_other_segment;  ///< the other segment whose markers keep the steadiest distances
+  double best_other_sd_mm = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// The median SD (clusters.distance_sd) of the distances from `point` to the points `others`, NaN
+/// where none was seen with it often enough.
+inline double median_distance_sd(const RigidClusters& clusters, int point, const std::vector<int>& others) {
+  std::vector<double> sd;
+  for (int other : others)
+    if (other != point && std::isfinite(clusters.distance_sd(point, other)))
+      sd.push_back(clusters.distance_sd(point, other));
+  if (sd.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto middle = sd.begin() + static_cast<std::ptrdiff_t>(sd.size() / 2);
+  std::nth_element(sd.begin(), middle, sd.end());
+  if (sd.size() % 2 == 1) return *middle;
+  return 0.5 * (*middle + *std::max_element(sd.begin(), middle));
+}
+
+/// The recording points of each segment, for markers `points[i]` assigned to frames `frame_of[i]`.
+inline std::map<std::string, std::vector<int>> points_by_segment(const body::BodyModel& base,
+                                                                 const std::vector<int>& points,
+                                                                 const std::vector<int>& frame_of) {
+  std::map<std::string, std::vector<int>> by_segment;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    by_segment[body::segment_of_frame(base, frame_of[i])].push_back(points[i]);
+  return by_segment;
+}
+
+/// The segments next to `segment` in the model's tree: its parent and its children.
+inline std::vector<std::string> adjacent_segments(const body::BodyModel& base, const std::string& segment) {
+  std::vector<std::string> adjacent;
+  for (const body::Joint& joint : base.joints) {
+    const std::string parent = body::segment_of_frame(base, joint.parent_frame);
+    if (joint.group == segment && parent != segment) adjacent.push_back(parent);
+    if (parent == segment && joint.group != segment) adjacent.push_back(joint.group);
+  }
+  return adjacent;
+}
+
+/// Per marker i (recording point points[i], assigned to frame frame_of[i] of `base`): how rigidly
+/// it rides with its segment's other markers and with the best other segment's. A marker alone on
+/// its segment is compared with the markers of the adjacent segments instead (a hand marker moves
+/// against the forearm's by the wrist's turn only, a thigh marker on the hand by much more), and
+/// its best other segment is sought beyond them.
+inline std::vector<MarkerRigidity> marker_rigidity(const RigidClusters& clusters, const body::BodyModel& base,
+                                                   const std::vector<int>& points,
+                                                   const std::vector<int>& frame_of) {
+  const auto by_segment = points_by_segment(base, points, frame_of);
+  std::vector<MarkerRigidity> result(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    MarkerRigidity& r = result[i];
+    r.segment = body::segment_of_frame(base, frame_of[i]);
+    std::vector<std::string> own{r.segment};
+    if (by_segment.at(r.segment).size() < 2) own = adjacent_segments(base, r.segment);
+    std::vector<int> own_points;
+    for (const std::string& segment : own)
+      if (const auto found = by_segment.find(segment); found != by_segment.end())
+        own_points.insert(own_points.end(), found->second.begin(), found->second.end());
+    r.own_sd_mm = median_distance_sd(clusters, points[i], own_points);
+    for (const auto& [segment, members] : by_segment) {
+      if (segment == r.segment || std::find(own.begin(), own.end(), segment) != own.end()) continue;
+      const double sd = median_distance_sd(clusters, points[i], members);
+      if (std::isfinite(sd) && !(sd >= r.best_other_sd_mm))
+        r.best_other_sd_mm = sd, r.best_other_segment = segment;
+    }
+  }
+  return result;
+}
+
+/// One marker moved by repair_segment_assignment.
+struct SegmentMove {
+  std::size_t marker = 0;  ///< index into `points`
+  std::string from, to;    ///< segments
+  double from_sd_mm = 0;   ///< median distance SD to the markers of `from` before the move
+  double to_sd_mm = 0;     ///< ... and to those of `to`
+};
+
+/// Moves markers that are not rigid with their segment's markers (median distance SD above
+/// options.misfit_sd_mm) but rigid with another segment's (below options.move_ratio of that) to the
+/// other segment, onto the frame most of its markers ride on; the marker that fits its segment
+/// worst first (of a wrist and a thigh marker put together on the thigh, the wrist marker's
+/// distances vary most), and the rigidity measured again after each move, since a move changes
+/// two segments' members. Returns the moves in order.
+inline std::vector<SegmentMove> repair_segment_assignment(const RigidClusters& clusters,
+                                                          const body::BodyModel& base,
+                                                          const std::vector<int>& points,
+                                                          std::vector<int>& frame_of,
+                                                          const SegmentRigidityOptions& options = {}) {
+  std::vector<SegmentMove> moves;
+  for (std::size_t step = 0; step < points.size(); ++step) {
+    const std::vector<MarkerRigidity> rigidity = marker_rigidity(clusters, base, points, frame_of);
+    std::size_t worst = points.size();
+    double worst_sd = options.misfit_sd_mm;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const MarkerRigidity& r = rigidity[i];
+      if (r.own_sd_mm > worst_sd && r.best_other_sd_mm < options.move_ratio * r.own_sd_mm)
+        worst_sd = r.own_sd_mm, worst = i;
+    }
+    if (worst == points.size()) break;
+    const MarkerRigidity& r = rigidity[worst];
+    std::map<int, int> frame_votes;
+    for (std::size_t j = 0; j < points.size(); ++j)
+      if (j != worst && body::segment_of_frame(base, frame_of[j]) == r.best_other_segment)
+        ++frame_votes[frame_of[j]];
+    const auto target = std::max_element(frame_votes.begin(), frame_votes.end(),
+                                         [](const auto& a, const auto& b) { return a.second < b.second; });
+    moves.push_back({worst, r.segment, r.best_other_segment, r.own_sd_mm, r.best_other_sd_mm});
+    frame_of[worst] = target->first;
+  }
+  return moves;
+}
+
+}  // namespace s2kf::track
