@@ -53,12 +53,15 @@ struct MarkerSetInferenceOptions {
   /// The recording's vertical: 0, 1 or 2 for x, y or z up; -1: the axis along which the markers
   /// of the candidate template frames spread furthest (a subject is taller than wide).
   int up_axis = -1;
-  /// Candidate frames for the template fit, spread evenly over the frames that show nearly the
-  /// most markers: a recording need not start standing.
+  /// Candidate frames for the template fit, spread evenly over the frames that show the most
+  /// markers: a recording need not start standing.
   int template_frames = 8;
   /// Of those, the ones whose facing direction wins most clearly are tried through the rounds of
   /// tracking, at most this many; the one whose markers then ride most rigidly is kept.
   int template_attempts = 3;
+  /// The pose is refined (hips, knees, shoulders, elbows, trunk) only where the zero pose with the
+  /// arms turned out leaves an RMS residual above this: a subject mid-motion, not one standing.
+  double refine_pose_above_rms_mm = 30.0;
   TrackerOptions tracker;  ///< for the rounds of tracking (fewer samples are enough)
   long frames = 600;       ///< frames tracked per round at most, from the start
   long skip_frames = 20;   ///< tracked frames left out at the start of each round (convergence)
@@ -112,20 +115,13 @@ struct TemplatePoint {
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< in its frame
 };
 
-/// The places of the base model's markers and of the sets' markers, one for all the sets that put
-/// a marker within 10 mm of the same place on the same frame (the sets share most landmarks, and
-/// every point costs the template fit time).
 inline std::vector<TemplatePoint> template_points(const body::BodyModel& base,
                                                   const std::vector<body::MarkerSet>& sets) {
   std::vector<TemplatePoint> points;
-  const auto add = [&points](const body::Marker& marker) {
-    for (const TemplatePoint& p : points)
-      if (p.frame == marker.frame && (p.offset - marker.offset).norm() < 10.0) return;
-    points.push_back({marker.frame, marker.offset});
-  };
-  for (const body::Marker& marker : base.markers) add(marker);
+  for (const body::Marker& marker : base.markers) points.push_back({marker.frame, marker.offset});
   for (const body::MarkerSet& set : sets)
-    for (const body::Marker& marker : body::apply_marker_set(base, set).markers) add(marker);
+    for (const body::Marker& marker : body::apply_marker_set(base, set).markers)
+      points.push_back({marker.frame, marker.offset});
   return points;
 }
 
@@ -162,6 +158,7 @@ struct TemplateFit {
   /// The cost of the best fit facing more than 60 degrees away, over `cost`: how clearly the
   /// facing direction won (above 1: it did).
   double margin = 0;
+  bool pose_refined = false;  ///< whether the zero pose fitted too poorly and the pose was refined
   double rms_mm() const {
     return std::sqrt(cost / static_cast<double>(std::max<std::size_t>(1, nearest.size())));
   }
@@ -234,11 +231,13 @@ inline void refine_pose(const body::BodyModel& base, const std::vector<TemplateP
 
 /// Fits the model, scaled to 1300-2100 mm and turned about the vertical `up` in 10 deg steps, at
 /// its zero pose with the arms turned out 0-90 deg, to the marker positions `lab` by nearest
-/// points, the translation refined by four matching steps; then lets the pose vary
-/// (refine_pose) for the best direction and its best rivals, and compares the best direction with
-/// the best more than 60 deg away.
+/// points, the translation refined by four matching steps; where the best of these leaves an RMS
+/// residual above `refine_above_rms_mm`, lets the pose vary (refine_pose) for the best direction
+/// and its best rivals; compares the best direction with the best more than 60 deg away. Where the
+/// near-zero pose fits, it is kept: refining it only trades a marker at a joint between the two
+/// segments that meet there.
 inline TemplateFit fit_template(const body::BodyModel& base, const std::vector<TemplatePoint>& candidates,
-                                const Eigen::Matrix3Xd& lab, int up) {
+                                const Eigen::Matrix3Xd& lab, int up, double refine_above_rms_mm) {
   constexpr int kHeadings = 36;
   std::vector<TemplateFit> best_by_heading(kHeadings);
   for (const double abduction : {0.0, 0.4, 0.8, 1.2, 1.57})
@@ -279,7 +278,8 @@ inline TemplateFit fit_template(const body::BodyModel& base, const std::vector<T
   std::vector<TemplateFit> refined{best_beyond(0, -1)};
   refined.push_back(best_beyond(refined[0].heading, kPi / 3));
   refined.push_back(best_beyond(refined[0].heading, 2 * kPi / 3));
-  for (TemplateFit& r : refined) refine_pose(base, candidates, lab, up, r);
+  if (refined[0].rms_mm() > refine_above_rms_mm)
+    for (TemplateFit& r : refined) refine_pose(base, candidates, lab, up, r), r.pose_refined = true;
   std::size_t best = 0;
   for (std::size_t r = 1; r < refined.size(); ++r)
     if (refined[r].cost < refined[best].cost) best = r;
@@ -387,7 +387,8 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
                                 "against anything else, so no segment can be told from another");
 
   // Candidate template frames: up to options.template_frames, spread evenly over the frames that
-  // show nearly the most markers (at least 90 % of the most).
+  // show the most markers (a marker the template frame does not show is placed from the motion
+  // alone, less surely).
   std::vector<long> visible_count(static_cast<std::size_t>(recording.frame_count()), 0);
   long most = 0;
   for (Eigen::Index f = 0; f < recording.frame_count(); ++f) {
@@ -396,7 +397,7 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
   }
   std::vector<long> well_seen;
   for (std::size_t f = 0; f < visible_count.size(); ++f)
-    if (10 * visible_count[f] >= 9 * most) well_seen.push_back(static_cast<long>(f));
+    if (visible_count[f] == most) well_seen.push_back(static_cast<long>(f));
   const long wanted = std::max(1, options.template_frames);
   std::vector<long> template_candidates;
   for (long k = 0; k < std::min<long>(wanted, static_cast<long>(well_seen.size())); ++k)
@@ -429,16 +430,18 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
   result.up_axis = up;
 
   // The template fit in every candidate frame. Shortlisted: the frames whose facing direction wins
-  // most clearly (beyond options.heading_margin); each is tried through the rounds below, and the
-  // one whose markers then ride most rigidly on their segments is kept. The template cost alone
-  // does not choose well: a crouch can fit a standing model's surface as closely as a stance.
+  // clearly (beyond options.heading_margin), those where the zero pose fitted first (the subject
+  // stands there, and the standing subject defines the zero of the joint angles, as the model's
+  // zero pose does), then the clearest; each is tried through the rounds below, and the one whose
+  // markers then ride most rigidly on their segments is kept.
   const std::vector<detail::TemplatePoint> candidates = detail::template_points(base, options.known_sets);
   std::vector<std::pair<long, detail::TemplateFit>> clear;
   std::string excluded_note;
   double best_margin = 0;
   long best_margin_frame = template_candidates.front();
   for (long f : template_candidates) {
-    detail::TemplateFit trial = detail::fit_template(base, candidates, positions(f, shown_in(f)), up);
+    detail::TemplateFit trial = detail::fit_template(base, candidates, positions(f, shown_in(f)), up,
+                                                     options.refine_pose_above_rms_mm);
     if (trial.margin > best_margin) best_margin = trial.margin, best_margin_frame = f;
     if (trial.margin > options.heading_margin) clear.emplace_back(f, std::move(trial));
   }
@@ -450,8 +453,14 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
       << " % better than one facing more than 60 degrees away); give a marker set (--markerset)";
     throw std::invalid_argument(s.str());
   }
-  std::stable_sort(clear.begin(), clear.end(),
-                   [](const auto& a, const auto& b) { return a.second.margin > b.second.margin; });
+  std::stable_sort(clear.begin(), clear.end(), [](const auto& a, const auto& b) {
+    if (a.second.pose_refined != b.second.pose_refined) return b.second.pose_refined;
+    return a.second.margin > b.second.margin;
+  });
+  if (!clear.front().second.pose_refined)
+    clear.erase(
+        std::remove_if(clear.begin(), clear.end(), [](const auto& c) { return c.second.pose_refined; }),
+        clear.end());
   clear.resize(
       std::min<std::size_t>(clear.size(), static_cast<std::size_t>(std::max(1, options.template_attempts))));
 
@@ -552,18 +561,21 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
     // markers vary by centimetres but stay constant to another segment's moves there (the template
     // put a thigh marker on the hand hanging beside it). Markers the template frame does not show
     // go to the segment whose markers keep the steadiest distances to them.
+    std::vector<int> placed_points, placed_frames;
+    std::vector<std::size_t> placed_index;
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (standing[i])
+        placed_points.push_back(points[i]), placed_frames.push_back(frame_of[i]), placed_index.push_back(i);
     for (const SegmentMove& move :
-         repair_segment_assignment(result.clusters, base, points, frame_of, options.rigidity)) {
+         repair_segment_assignment(result.clusters, base, placed_points, placed_frames, options.rigidity)) {
       std::ostringstream s;
-      s << "moved " << recording.labels[static_cast<std::size_t>(points[move.marker])] << " from "
+      s << "moved " << recording.labels[static_cast<std::size_t>(placed_points[move.marker])] << " from "
         << move.from << " to " << move.to << ": its distances to the markers of " << move.from << " vary by "
         << std::lround(move.from_sd_mm) << " mm (median SD), to those of " << move.to << " by "
         << std::lround(move.to_sd_mm) << " mm";
       a.notes.push_back(s.str());
     }
-    std::vector<int> placed_points, placed_frames;
-    for (std::size_t i = 0; i < points.size(); ++i)
-      if (standing[i]) placed_points.push_back(points[i]), placed_frames.push_back(frame_of[i]);
+    for (std::size_t j = 0; j < placed_index.size(); ++j) frame_of[placed_index[j]] = placed_frames[j];
     const auto placed_by_segment = points_by_segment(base, placed_points, placed_frames);
     for (std::size_t i = 0; i < points.size(); ++i) {
       if (standing[i]) continue;

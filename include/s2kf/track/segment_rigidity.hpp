@@ -112,12 +112,16 @@ struct SegmentMove {
   double to_sd_mm = 0;     ///< ... and to those of `to`
 };
 
-/// Moves markers that are not rigid with their segment's markers (median distance SD above
-/// options.misfit_sd_mm) but rigid with another segment's (below options.move_ratio of that) to the
-/// other segment, onto the frame most of its markers ride on; the marker that fits its segment
-/// worst first (of a wrist and a thigh marker put together on the thigh, the wrist marker's
-/// distances vary most), and the rigidity measured again after each move, since a move changes
-/// two segments' members. Returns the moves in order.
+/// Moves markers to the segment they ride on rigidly, the marker that fits its own segment worst
+/// first (of a wrist and a thigh marker put together on the thigh, the wrist marker's distances
+/// vary most), and the rigidity measured again after each move, since a move changes two
+/// segments' members. A marker moves where its distances to its own segment's markers vary by
+/// more than options.misfit_sd_mm, to the segment whose markers keep them below options.move_ratio
+/// of that (one next to its own where one qualifies: a marker at the hip rides on the pelvis, not
+/// on a trunk that did not bend in the recording), onto the frame most of that segment's markers
+/// ride on. Not between two segments that are both steady with it (a marker at a joint the
+/// recording hardly turns): there the difference is soft tissue, and only the template can tell.
+/// Returns the moves in order.
 inline std::vector<SegmentMove> repair_segment_assignment(const RigidClusters& clusters,
                                                           const body::BodyModel& base,
                                                           const std::vector<int>& points,
@@ -126,22 +130,36 @@ inline std::vector<SegmentMove> repair_segment_assignment(const RigidClusters& c
   std::vector<SegmentMove> moves;
   for (std::size_t step = 0; step < points.size(); ++step) {
     const std::vector<MarkerRigidity> rigidity = marker_rigidity(clusters, base, points, frame_of);
+    const auto by_segment = points_by_segment(base, points, frame_of);
     std::size_t worst = points.size();
-    double worst_sd = options.misfit_sd_mm;
+    std::string worst_target;
+    double worst_own = 0, worst_target_sd = 0;
     for (std::size_t i = 0; i < points.size(); ++i) {
       const MarkerRigidity& r = rigidity[i];
-      if (r.own_sd_mm > worst_sd && r.best_other_sd_mm < options.move_ratio * r.own_sd_mm)
-        worst_sd = r.own_sd_mm, worst = i;
+      if (!(r.own_sd_mm > worst_own)) continue;
+      const bool alone = by_segment.at(r.segment).size() < 2;
+      const bool misfit =
+          r.own_sd_mm > options.misfit_sd_mm && r.best_other_sd_mm < options.move_ratio * r.own_sd_mm;
+      if (!misfit) continue;
+      std::string target = r.best_other_segment;
+      double target_sd = r.best_other_sd_mm;
+      double adjacent_sd = options.move_ratio * r.own_sd_mm;  // an adjacent segment, where one qualifies
+      if (!alone)
+        for (const std::string& segment : adjacent_segments(base, r.segment))
+          if (const auto found = by_segment.find(segment); found != by_segment.end()) {
+            const double sd = median_distance_sd(clusters, points[i], found->second);
+            if (sd < adjacent_sd) adjacent_sd = sd, target = segment, target_sd = sd;
+          }
+      if (target.empty()) continue;
+      worst = i, worst_own = r.own_sd_mm, worst_target = target, worst_target_sd = target_sd;
     }
     if (worst == points.size()) break;
-    const MarkerRigidity& r = rigidity[worst];
     std::map<int, int> frame_votes;
     for (std::size_t j = 0; j < points.size(); ++j)
-      if (j != worst && body::segment_of_frame(base, frame_of[j]) == r.best_other_segment)
-        ++frame_votes[frame_of[j]];
+      if (j != worst && body::segment_of_frame(base, frame_of[j]) == worst_target) ++frame_votes[frame_of[j]];
     const auto target = std::max_element(frame_votes.begin(), frame_votes.end(),
-                                         [](const auto& a, const auto& b) { return a.second < b.second; });
-    moves.push_back({worst, r.segment, r.best_other_segment, r.own_sd_mm, r.best_other_sd_mm});
+                                         [](const auto& x, const auto& y) { return x.second < y.second; });
+    moves.push_back({worst, rigidity[worst].segment, worst_target, worst_own, worst_target_sd});
     frame_of[worst] = target->first;
   }
   return moves;
