@@ -27,6 +27,11 @@ struct SegmentRigidityOptions {
   double misfit_sd_mm = 20.0;
   /// ... and the median SD to the markers of another segment is below this fraction of it.
   double move_ratio = 0.5;
+  /// For a marker alone on its segment, compared with the adjacent segments' markers: their joints
+  /// turn between them and it, so only a marker on the wrong limb altogether exceeds this (a thigh
+  /// marker put on the hand, 400 mm in a simulated cartwheel; a shank marker against the thigh and
+  /// foot of a handstand, 21 mm).
+  double alone_misfit_sd_mm = 40.0;
 };
 
 /// How rigidly one marker rides with the markers of its segment and of the best other segment.
@@ -138,8 +143,8 @@ inline std::vector<SegmentMove> repair_segment_assignment(const RigidClusters& c
       const MarkerRigidity& r = rigidity[i];
       if (!(r.own_sd_mm > worst_own)) continue;
       const bool alone = by_segment.at(r.segment).size() < 2;
-      const bool misfit =
-          r.own_sd_mm > options.misfit_sd_mm && r.best_other_sd_mm < options.move_ratio * r.own_sd_mm;
+      const bool misfit = r.own_sd_mm > (alone ? options.alone_misfit_sd_mm : options.misfit_sd_mm) &&
+                          r.best_other_sd_mm < options.move_ratio * r.own_sd_mm;
       if (!misfit) continue;
       std::string target = r.best_other_segment;
       double target_sd = r.best_other_sd_mm;
