@@ -4,12 +4,15 @@
 ///
 /// 1. Rigid clusters (rigid_clusters.hpp): a recording in which nothing moves against anything
 ///    else cannot be told apart and is refused.
-/// 2. A template fit in each of several well-seen frames spread over the recording (those showing
-///    nearly the most markers): the model at its zero pose, arms down to out sideways, scaled and
-///    turned about the recording's vertical, its surface given by the markers of the known sets
-///    (the places where labs put markers). Kept: the frame where the model fits best among those
-///    whose facing direction wins clearly; no such frame, and the recording is refused. Each
-///    marker takes the frame of the nearest template point.
+/// 2. A template fit in each of several frames spread over the recording (those showing the most
+///    markers): the model at its zero pose, arms down to out sideways, scaled and turned about the
+///    recording's vertical, its surface given by the markers of the known sets (the places where
+///    labs put markers); where the zero pose fits poorly (a subject mid-motion), the pose is
+///    refined. Shortlisted: the frames whose facing direction wins clearly, those where the zero
+///    pose fitted first; the one whose set then tracks most rigidly (step 4) is kept. No such
+///    frame, and the recording is refused. Each marker takes the frame of the nearest template
+///    point, its offset where the fitted pose puts it; points far from every template point
+///    (virtual points) are left out.
 /// 3. The topology check (segment_rigidity.hpp): a marker whose distances to its segment's other
 ///    markers vary by centimetres, but stay constant to another segment's, moves there.
 /// 4. Rounds of tracking and reassignment: the recording is tracked with the current set; each
@@ -527,7 +530,7 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
     const Eigen::Matrix3Xd lab = positions(template_frame, shown);
 
     // The initial set: every marker on the frame of its nearest template point. A marker's offset
-    // on any frame is where the template pose puts it: the standing subject defines the zero of
+    // on any frame is where the fitted pose puts it: the standing subject defines the zero of
     // the joint angles, as the model's zero pose does (offsets measured from tracked frames would
     // carry the first rounds' errors into the set).
     const body::FrameTransforms template_frames =
