@@ -44,7 +44,7 @@ const RegisterCommand markerset_registration{
       auto settings = std::make_shared<InferSettings>();
       infer
           ->add_option("recording", settings->input,
-                       "C3D recording (the subject standing in its first frames)")
+                       "C3D recording (any motion; the subject need not stand at the start)")
           ->required();
       infer->add_option("--out", settings->out, "marker-set file to write (JSON)")->required();
       infer->add_option("--up", settings->up, "the recording's vertical axis: x, y, z or auto (default)")

@@ -64,6 +64,7 @@
 #include <s2kf/track/rigid_clusters.hpp>
 #include <s2kf/track/rigid_fit.hpp>
 #include <s2kf/track/segment_observation.hpp>
+#include <s2kf/track/segment_rigidity.hpp>
 #include <s2kf/track/session.hpp>
 #include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/state_chart.hpp>
