@@ -240,6 +240,30 @@ class BundleAdjustment {
   const std::vector<std::string>& segments() const { return segments_; }
   const std::vector<double>& cumulative() const { return cumulative_; }
 
+  /// The data-over-prior information ratio below which prior_only_fraction = `fraction` leaves a
+  /// direction to the prior, for `frames` frames: that fraction of the ratio of one marker
+  /// coordinate seen in every frame, frames x (offset prior SD / marker noise)^2.
+  double prior_only_threshold(double fraction, std::size_t frames) const {
+    return fraction * static_cast<double>(frames) * options_.offset_prior_sd_mm *
+           options_.offset_prior_sd_mm / noise_variance_;
+  }
+
+  /// The subject's information from the data of `frames` at their poses and `model` (the
+  /// reduced normal matrix without priors or damping, the poses eliminated), in the prior's
+  /// metric: the unknowns [length factors, offsets] divided by their prior SDs (`prior_sd`), so
+  /// that an eigenvalue is the ratio of the data's information to the prior's along its
+  /// eigenvector. What prior_only_fraction thresholds; the identifiable-subject reference uses it
+  /// at the true poses.
+  Eigen::MatrixXd information_in_prior_metric(const body::BodyModel& model,
+                                              const std::vector<BundleFrame>& frames,
+                                              Eigen::VectorXd& prior_sd) {
+    scale_weight_ = static_cast<double>(frames.size()) /
+                    (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
+    NormalEquations normal;
+    linearise_all(model, frames, normal);
+    return whitened_information(normal, prior_sd);
+  }
+
   /// Adjusts `model` and the frames' poses in place; fills the pass's iteration count and RMS.
   void adjust(body::BodyModel& model, std::vector<BundleFrame>& frames, CalibrationPass& pass) {
     // The length prior grows with the frames like the data: soft-tissue bias grows with them
@@ -428,6 +452,16 @@ class BundleAdjustment {
     return information;
   }
 
+  /// data_information in the prior's metric (information_in_prior_metric), at the current
+  /// scale_weight_; `prior_sd` receives the prior SDs.
+  Eigen::MatrixXd whitened_information(const NormalEquations& normal, Eigen::VectorXd& prior_sd) const {
+    prior_sd.resize(unknowns_);
+    for (int s = 0; s < scales_; ++s) prior_sd(s) = 1.0 / std::sqrt(scale_weight_);
+    for (std::size_t u = 0; u < used_.size(); ++u)
+      prior_sd.segment<3>(scales_ + 3 * static_cast<int>(u)).setConstant(1.0 / std::sqrt(offset_prior_[u]));
+    return prior_sd.asDiagonal() * data_information(normal) * prior_sd.asDiagonal();
+  }
+
   /// Sets `estimated_`, the basis of the subject directions the bundle adjustment moves: in the
   /// prior's metric (unknowns scaled by their prior SDs), the eigenvectors of the data information
   /// whose eigenvalue (information from the data over the prior's) reaches prior_only_fraction of
@@ -437,14 +471,9 @@ class BundleAdjustment {
                                    std::size_t frames, CalibrationPass& pass) {
     estimated_.resize(0, 0);
     if (options_.prior_only_fraction <= 0) return;
-    const double threshold = options_.prior_only_fraction * static_cast<double>(frames) *
-                             options_.offset_prior_sd_mm * options_.offset_prior_sd_mm / noise_variance_;
-    Eigen::VectorXd prior_sd(unknowns_);
-    for (int s = 0; s < scales_; ++s) prior_sd(s) = 1.0 / std::sqrt(scale_weight_);
-    for (std::size_t u = 0; u < used_.size(); ++u)
-      prior_sd.segment<3>(scales_ + 3 * static_cast<int>(u)).setConstant(1.0 / std::sqrt(offset_prior_[u]));
-    const Eigen::MatrixXd whitened = prior_sd.asDiagonal() * data_information(normal) * prior_sd.asDiagonal();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(whitened);
+    const double threshold = prior_only_threshold(options_.prior_only_fraction, frames);
+    Eigen::VectorXd prior_sd;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(whitened_information(normal, prior_sd));
     if (eigen.info() != Eigen::Success) return;  // estimate every direction, as without the option
     std::vector<Eigen::Index> kept;
     for (Eigen::Index i = 0; i < unknowns_; ++i) {
