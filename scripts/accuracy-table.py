@@ -50,7 +50,9 @@ for occluded in modes:
                         "calibrated": summary["calibrated"],
                         "s2kf": {k: summary["s2kf"][k] for k in ("truth", "latency_ms", "mean_marker_distance_mm")},
                         "s2kf_smoothed": summary["s2kf_smoothed"],
-                        "true_subject_reference": summary["true_subject_reference"]})
+                        "true_subject_reference": summary["true_subject_reference"],
+                        "identifiable_subject_reference": summary.get("identifiable_subject_reference"),
+                        "tracker_model_reference": summary.get("tracker_model_reference")})
             if "error_by_time_hidden" in summary:
                 raw[-1]["error_by_time_hidden"] = summary["error_by_time_hidden"]
             rows.append((occluded, motion, seed, summary["s2kf"]["truth"], summary["s2kf_smoothed"],

@@ -10,7 +10,8 @@
 //          [POSITION_ACC ORIENTATION_ACC JOINT_ACC POSITION_SPEED ORIENTATION_SPEED JOINT_SPEED
 //           REFERENCE(0|1) [INITIAL_RATE_SDS x3]]
 // Environment: OFFSET_SD, SCALE_SD (calibration priors), NOSCALE (offsets only), PRIOR_ONLY (the
-// calibration's prior_only_fraction), SEGMENTS (per segment), DIRECTIONS (the directions left to the prior).
+// calibration's prior_only_fraction), PRIOR_SHARE (prior_only_share: the fraction thresholds the
+// surviving share), SEGMENTS (per segment), DIRECTIONS (the directions left to the prior).
 #include <cstdio>
 #include <cstdlib>
 #include <s2kf/body/marker_set.hpp>
@@ -43,6 +44,7 @@ int main(int argc, char** argv) {
   if (const char* v = std::getenv("SCALE_SD")) opt.calibration.scale_prior_sd_per_frame = std::atof(v);
   if (const char* v = std::getenv("NOSCALE")) opt.calibration.estimate_segment_scales = false;
   if (const char* v = std::getenv("PRIOR_ONLY")) opt.calibration.prior_only_fraction = std::atof(v);
+  if (std::getenv("PRIOR_SHARE")) opt.calibration.prior_only_share = true;
   std::string model = argv[6];
   opt.tracker.motion_model =
       model == "cv" ? track::MotionModel::constant_velocity : track::MotionModel::random_walk;

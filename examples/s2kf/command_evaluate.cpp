@@ -17,6 +17,8 @@
 #include <s2kf/sim/subject.hpp>
 #include <s2kf/track/evaluation.hpp>
 #include <s2kf/track/hidden_time_error.hpp>
+#include <s2kf/track/identifiable_subject_reference.hpp>
+#include <s2kf/track/session.hpp>
 #include <s2kf/track/true_subject_reference.hpp>
 
 #include <nlohmann/json.hpp>
@@ -30,6 +32,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -149,6 +152,51 @@ Simulated simulate_for_evaluation(const EvaluateSettings& settings) {
   return simulated;
 }
 
+/// The identifiable-subject references (identifiable_subject_reference.hpp): the true subject
+/// with the part the calibration frames' data cannot determine reset to the marker set's values,
+/// then the true-subject fit with it. The thresholds are CalibrationOptions::prior_only_fraction's
+/// (a direction's information against a marker coordinate's seen in every calibration frame):
+/// 1e-5, the exact gauges (they lie below 2e-6, the first direction the data do see above 4e-5,
+/// on a subject without soft tissue); 0.03, a looser one, which leaves the weakly seen directions
+/// to the prior too; and "nominal", every direction reset: the nominal model itself, what
+/// calibrating can improve on. The frames and priors are the default calibration's; empty when
+/// the recording's marker set is not the model's.
+json identifiable_references(const track::Session& setup, const Simulated& simulated,
+                             const io::MotionTable& truth, long warmup) {
+  const track::SessionOptions defaults;
+  track::CalibrationOptions calibration = defaults.calibration;
+  calibration.marker_weight = track::calibration_weights(setup.marker_set, setup.tracker.marker_noise_mm);
+  const std::vector<long> frames = track::calibration_frame_indices(
+      track::calibration_stretches(simulated.recording.frames(), defaults.calibration_frames,
+                                   defaults.calibration_windows),
+      calibration);
+  // The model the calibration starts from (prepare_session's, before the calibration).
+  const body::BodyModel nominal =
+      body::apply_marker_set(body::mmm_body_model(setup.marker_set.reference_height_mm), setup.marker_set)
+          .scaled(setup.height_mm);
+  json references = json::array();
+  for (const double fraction : {1e-5, 0.03, std::numeric_limits<double>::infinity()}) {
+    track::IdentifiableSubject identifiable;
+    try {
+      identifiable = track::identifiable_subject(nominal, simulated.subject, simulated.recording, frames,
+                                                 calibration, setup.tracker.marker_noise_mm, fraction);
+    } catch (const std::invalid_argument&) {
+      return json::array();  // another marker set: no common unknowns to compare
+    }
+    sim::Subject subject = simulated.subject;
+    subject.model = identifiable.model;
+    const track::TruthComparison fit = track::compare_with_truth(
+        setup.model, track::true_subject_fit(subject, simulated.recording), truth, warmup);
+    references.push_back({{"prior_only_fraction", std::isinf(fraction) ? json("nominal") : json(fraction)},
+                          {"information_ratio_threshold", number_or_null(identifiable.threshold)},
+                          {"reset_directions", identifiable.reset_directions},
+                          {"subject_unknowns", identifiable.information_ratios.size()},
+                          {"frames_used", identifiable.frames_used},
+                          {"truth", truth_json(fit)}});
+  }
+  return references;
+}
+
 void run_evaluate(const EvaluateSettings& settings) {
   const bool progress = !settings.quiet;
   const bool terminal = progress && isatty(STDERR_FILENO);
@@ -252,7 +300,8 @@ void run_evaluate(const EvaluateSettings& settings) {
   say("baseline: " + cell(baseline.level_mm) + " mm, median " + cell(baseline.median_ms) + " ms per frame");
 
   // The reachable reference (simulated input only) and the smoothed S2KF, against the truth.
-  std::optional<track::TruthComparison> reference, smoothed;
+  std::optional<track::TruthComparison> reference, smoothed, model_fit;
+  json identifiable = json::array();
   // How the segments' error grows with the time their markers have been hidden (the input's own
   // occlusion; everything lands in the first bin without it).
   json error_by_time_hidden = nullptr;
@@ -266,6 +315,22 @@ void run_evaluate(const EvaluateSettings& settings) {
                                           track::true_subject_fit(simulated->subject, simulated->recording),
                                           *truth, settings.warmup);
     say("true-subject fit: segment orientation RMS " + cell(reference->segment_orientation_rms_deg) + " deg");
+    identifiable = identifiable_references(setup, *simulated, *truth, settings.warmup);
+    // The same fit with the tracker's model (calibrated unless --no-calibrate): how much of the
+    // tracker's error its subject model explains, and how much its filtering adds.
+    if (setup.model.marker_names() == simulated->subject.model.marker_names()) {
+      sim::Subject tracked_subject = simulated->subject;
+      tracked_subject.model = setup.model;
+      model_fit = track::compare_with_truth(setup.model,
+                                            track::true_subject_fit(tracked_subject, simulated->recording),
+                                            *truth, settings.warmup);
+      say("tracker-model fit: segment orientation RMS " + cell(model_fit->segment_orientation_rms_deg) +
+          " deg");
+    }
+    for (const json& r : identifiable)
+      say("identifiable-subject fit (prior-only fraction " + r["prior_only_fraction"].dump() + ", " +
+          std::to_string(r["reset_directions"].get<int>()) + " directions reset): segment orientation RMS " +
+          cell(r["truth"]["segment_orientation_rms_deg"].get<double>()) + " deg");
   }
   if (settings.smooth && truth) {
     SequenceFrameSource source(complete);
@@ -354,6 +419,8 @@ void run_evaluate(const EvaluateSettings& settings) {
                   {"occlusion", occlusion_json},
                   {"sample_sweep", sweep_json},
                   {"true_subject_reference", reference ? truth_json(*reference) : json(nullptr)},
+                  {"identifiable_subject_reference", simulated ? identifiable : json(nullptr)},
+                  {"tracker_model_reference", model_fit ? truth_json(*model_fit) : json(nullptr)},
                   {"s2kf_smoothed", smoothed ? truth_json(*smoothed) : json(nullptr)},
                   {"error_by_time_hidden", error_by_time_hidden},
                   {"files", written},

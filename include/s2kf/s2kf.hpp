@@ -58,6 +58,7 @@
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/hidden_time_error.hpp>
+#include <s2kf/track/identifiable_subject_reference.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/marker_set_inference.hpp>
 #include <s2kf/track/marker_set_mapping.hpp>

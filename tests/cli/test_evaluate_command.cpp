@@ -169,6 +169,19 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
   EXPECT_LT(reference, json_number(summary, "segment_orientation_rms_deg", "s2kf"));  // it knows the subject
   EXPECT_GT(json_number(summary, "segment_orientation_rms_deg", "s2kf_smoothed"), 0.1);
   EXPECT_EQ(nlohmann::json::parse(summary)["frames"], 80);
+  // The identifiable-subject references: at the exact gauges, a looser threshold and the nominal.
+  // Without calibration the tracker's model is the nominal one, so the fit with the tracker's model
+  // and the "nominal" reference are the same fit.
+  const nlohmann::json parsed = nlohmann::json::parse(summary);
+  const nlohmann::json& identifiable = parsed["identifiable_subject_reference"];
+  ASSERT_EQ(identifiable.size(), 3u);
+  EXPECT_EQ(identifiable[0]["prior_only_fraction"], 1e-5);
+  EXPECT_EQ(identifiable[2]["prior_only_fraction"], "nominal");
+  EXPECT_EQ(identifiable[2]["reset_directions"], identifiable[2]["subject_unknowns"]);
+  EXPECT_LE(identifiable[0]["reset_directions"].get<int>(), identifiable[1]["reset_directions"].get<int>());
+  EXPECT_NEAR(identifiable[2]["truth"]["segment_orientation_rms_deg"].get<double>(),
+              parsed["tracker_model_reference"]["segment_orientation_rms_deg"].get<double>(), 1e-9);
+  EXPECT_GT(identifiable[0]["truth"]["segment_orientation_rms_deg"].get<double>(), 0.1);
 }
 
 }  // namespace

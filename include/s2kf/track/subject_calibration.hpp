@@ -75,6 +75,13 @@ struct CalibrationOptions {
   /// subjects better on some motions and worse on others (docs/tracking.md, "Gauge-aware subject
   /// calibration"), so it is not the default.
   double prior_only_fraction = 0;
+  /// With prior_only_share, prior_only_fraction thresholds instead the share of a direction's
+  /// information (the data's with the poses known, plus the prior's) that survives the poses'
+  /// elimination: the generalised eigenproblem S v = mu (C + P) v. A gauge keeps none of it; a
+  /// direction the poses do not trade with keeps nearly all, however often its markers are hidden.
+  /// 0.1 made the segments of simulated subjects better and their flexion and root orientation
+  /// worse (docs/tracking.md, "The identifiable-subject reference"), so it is not the default.
+  bool prior_only_share = false;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
   int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
   /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
@@ -290,6 +297,30 @@ class BundleAdjustment {
   const std::vector<std::string>& segments() const { return segments_; }
   const std::vector<double>& cumulative() const { return cumulative_; }
 
+  /// The data-over-prior information ratio below which prior_only_fraction = `fraction` leaves a
+  /// direction to the prior, for `frames` frames: that fraction of the ratio of one marker
+  /// coordinate seen in every frame, frames x (offset prior SD / marker noise)^2.
+  double prior_only_threshold(double fraction, std::size_t frames) const {
+    return fraction * static_cast<double>(frames) * options_.offset_prior_sd_mm *
+           options_.offset_prior_sd_mm / noise_variance_;
+  }
+
+  /// The subject's information from the data of `frames` at their poses and `model` (the
+  /// reduced normal matrix without priors or damping, the poses eliminated), in the prior's
+  /// metric: the unknowns [length factors, offsets] divided by their prior SDs (`prior_sd`), so
+  /// that an eigenvalue is the ratio of the data's information to the prior's along its
+  /// eigenvector. What prior_only_fraction thresholds; the identifiable-subject reference uses it
+  /// at the true poses.
+  Eigen::MatrixXd information_in_prior_metric(const body::BodyModel& model,
+                                              const std::vector<BundleFrame>& frames,
+                                              Eigen::VectorXd& prior_sd) {
+    scale_weight_ = static_cast<double>(frames.size()) /
+                    (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
+    NormalEquations normal;
+    linearise_all(model, frames, normal);
+    return whitened_information(normal, prior_sd);
+  }
+
   /// Adjusts `model` and the frames' poses in place; fills the pass's iteration count and RMS.
   void adjust(body::BodyModel& model, std::vector<BundleFrame>& frames, CalibrationPass& pass) {
     // The length prior grows with the frames like the data: soft-tissue bias grows with them
@@ -491,6 +522,16 @@ class BundleAdjustment {
     return information;
   }
 
+  /// data_information in the prior's metric (information_in_prior_metric), at the current
+  /// scale_weight_; `prior_sd` receives the prior SDs.
+  Eigen::MatrixXd whitened_information(const NormalEquations& normal, Eigen::VectorXd& prior_sd) const {
+    prior_sd.resize(unknowns_);
+    for (int s = 0; s < scales_; ++s) prior_sd(s) = 1.0 / std::sqrt(scale_weight_);
+    for (std::size_t u = 0; u < used_.size(); ++u)
+      prior_sd.segment<3>(scales_ + 3 * static_cast<int>(u)).setConstant(1.0 / std::sqrt(offset_prior_[u]));
+    return prior_sd.asDiagonal() * data_information(normal) * prior_sd.asDiagonal();
+  }
+
   /// Sets `estimated_`, the basis of the subject directions the bundle adjustment moves: in the
   /// prior's metric (unknowns scaled by their prior SDs), the eigenvectors of the data information
   /// whose eigenvalue (information from the data over the prior's) reaches prior_only_fraction of
@@ -500,37 +541,48 @@ class BundleAdjustment {
                                    std::size_t frames, CalibrationPass& pass) {
     estimated_.resize(0, 0);
     if (options_.prior_only_fraction <= 0) return;
-    const double threshold = options_.prior_only_fraction * static_cast<double>(frames) *
-                             options_.offset_prior_sd_mm * options_.offset_prior_sd_mm / noise_variance_;
-    Eigen::VectorXd prior_sd(unknowns_);
-    for (int s = 0; s < scales_; ++s) prior_sd(s) = 1.0 / std::sqrt(scale_weight_);
-    for (std::size_t u = 0; u < used_.size(); ++u)
-      prior_sd.segment<3>(scales_ + 3 * static_cast<int>(u)).setConstant(1.0 / std::sqrt(offset_prior_[u]));
-    const Eigen::MatrixXd whitened = prior_sd.asDiagonal() * data_information(normal) * prior_sd.asDiagonal();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(whitened);
-    if (eigen.info() != Eigen::Success) return;  // estimate every direction, as without the option
+    Eigen::VectorXd prior_sd;
+    const Eigen::MatrixXd information = whitened_information(normal, prior_sd);
+    Eigen::VectorXd ratios;
+    Eigen::MatrixXd vectors;
+    double threshold = options_.prior_only_fraction;
+    if (options_.prior_only_share) {
+      // S v = mu (C + P) v in the prior's metric (P = I): mu is the share of what the data would
+      // tell with the poses known, plus the prior, that survives the poses' elimination.
+      Eigen::MatrixXd known = prior_sd.asDiagonal() * normal.C * prior_sd.asDiagonal();
+      known.diagonal().array() += 1.0;
+      const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information, known);
+      if (eigen.info() != Eigen::Success) return;  // estimate every direction, as without the option
+      ratios = eigen.eigenvalues();
+      vectors = eigen.eigenvectors();
+    } else {
+      threshold = prior_only_threshold(options_.prior_only_fraction, frames);
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information);
+      if (eigen.info() != Eigen::Success) return;
+      ratios = eigen.eigenvalues();
+      vectors = eigen.eigenvectors();
+    }
     std::vector<Eigen::Index> kept;
     for (Eigen::Index i = 0; i < unknowns_; ++i) {
-      const double ratio = eigen.eigenvalues()(i);
+      const double ratio = ratios(i);
       if (ratio >= threshold) {
         kept.push_back(i);
         continue;
       }
       // Where it lies: shares of the unit eigenvector by segment.
+      const Eigen::VectorXd v = vectors.col(i).normalized();
       std::map<std::string, double> share;
-      for (int s = 0; s < scales_; ++s)
-        share[segments_[static_cast<std::size_t>(s)]] += std::pow(eigen.eigenvectors()(s, i), 2);
+      for (int s = 0; s < scales_; ++s) share[segments_[static_cast<std::size_t>(s)]] += v(s) * v(s);
       for (std::size_t u = 0; u < used_.size(); ++u)
         share[body::segment_of_frame(model, model.markers[static_cast<std::size_t>(used_[u])].frame)] +=
-            eigen.eigenvectors().col(i).segment<3>(scales_ + 3 * static_cast<int>(u)).squaredNorm();
+            v.segment<3>(scales_ + 3 * static_cast<int>(u)).squaredNorm();
       const auto largest = std::max_element(share.begin(), share.end(),
                                             [](const auto& a, const auto& b) { return a.second < b.second; });
       pass.prior_only.push_back({ratio, largest->first, largest->second});
     }
     estimated_.resize(unknowns_, static_cast<Eigen::Index>(kept.size()));
     for (std::size_t c = 0; c < kept.size(); ++c)
-      estimated_.col(static_cast<Eigen::Index>(c)) =
-          prior_sd.asDiagonal() * eigen.eigenvectors().col(kept[c]);
+      estimated_.col(static_cast<Eigen::Index>(c)) = prior_sd.asDiagonal() * vectors.col(kept[c]);
   }
 
   /// A's Levenberg-Marquardt damping: relative to its diagonal, with a floor that keeps the

@@ -1,0 +1,158 @@
+/// @file
+/// The reachable reference on a simulated recording: what the best possible calibration could
+/// recover of the subject. Some directions of the subject (bone-length factors and marker offsets)
+/// are gauges: turning all markers of a foot about its 3-DoF ankle is undone by a constant offset
+/// of the ankle's angles, so the markers fit exactly as well either way and no calibration can
+/// tell them from the data; its priors keep them at the marker set's (nominal) values. The
+/// identifiable subject is the true subject with exactly that part reset to the nominal: the
+/// true-minus-nominal difference is kept only along the directions the calibration frames'
+/// data determine. Those come from the model and the recording the way the bundle adjustment sees
+/// them (its reduced normal matrix at the true poses, the poses eliminated, in the priors' metric,
+/// BundleAdjustment::information_in_prior_metric). The per-frame fit with that subject, started
+/// at the true pose (true_subject_fit), is then the reference a calibration can reach, where the
+/// true-subject fit is one it cannot.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/core/compilation_mode.hpp>
+#include <s2kf/sim/recording.hpp>
+#include <s2kf/sim/subject.hpp>
+#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/track/subject_calibration.hpp>
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+#include <cstdint>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+namespace s2kf::track {
+
+/// The frames of a recording the calibration adjusts: in each stretch (first frame, count) it
+/// reads, every options.stride-th frame from options.skip_frames after the stretch's start (the
+/// tracker starts afresh at each stretch).
+inline std::vector<long> calibration_frame_indices(
+    const std::vector<std::pair<std::int64_t, std::int64_t>>& stretches, const CalibrationOptions& options) {
+  std::vector<long> frames;
+  for (const auto& [first, count] : stretches)
+    for (std::int64_t k = options.skip_frames; k < count; k += options.stride)
+      frames.push_back(static_cast<long>(first + k));
+  return frames;
+}
+
+struct IdentifiableSubject {
+  body::BodyModel model;  ///< the true subject, its undetermined part reset to the nominal
+  /// Eigenvalues of the data information in the priors' metric (data over prior information along
+  /// each eigenvector), ascending, one per subject unknown.
+  Eigen::VectorXd information_ratios;
+  double threshold = 0;      ///< the information ratio below which a direction is reset
+  int reset_directions = 0;  ///< eigenvectors below the threshold: reset to the nominal
+  long frames_used = 0;      ///< calibration frames with 3 or more visible markers
+};
+
+/// The identifiable subject of `subject` on `recording` (simulated on it) against `nominal` (the
+/// model the calibration starts from: the same joints and markers in the same order, e.g. the
+/// marker set applied and scaled to the subject's height). The data information is formed at the
+/// true poses of `frames` (calibration_frame_indices) with the priors and marker weights of
+/// `options` and the marker noise `marker_noise_mm`; the subject difference true - nominal is kept
+/// along the eigenvectors whose data-over-prior information ratio reaches `prior_only_fraction`
+/// times that of a marker coordinate seen in every frame (CalibrationOptions::prior_only_fraction's
+/// threshold) and reset to the nominal along the others. 0 keeps the true subject; infinity gives
+/// the nominal.
+IdentifiableSubject identifiable_subject(const body::BodyModel& nominal, const sim::Subject& subject,
+                                         const sim::Recording& recording, const std::vector<long>& frames,
+                                         const CalibrationOptions& options, double marker_noise_mm,
+                                         double prior_only_fraction);
+
+#if S2KF_DEFINE_HEAVY
+S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nominal,
+                                                     const sim::Subject& subject,
+                                                     const sim::Recording& recording,
+                                                     const std::vector<long>& frames,
+                                                     const CalibrationOptions& options,
+                                                     double marker_noise_mm, double prior_only_fraction) {
+  const body::BodyModel& truth = subject.model;
+  if (nominal.marker_names() != truth.marker_names() || nominal.joint_names() != truth.joint_names())
+    throw std::invalid_argument(
+        "identifiable_subject: the nominal model has other joints or markers than the subject");
+  if (recording.labels != subject.marker_names ||
+      recording.truth.size() != static_cast<std::size_t>(recording.frames()))
+    throw std::invalid_argument("identifiable_subject: the recording was not simulated on this subject");
+  if (!(marker_noise_mm > 0) || !(prior_only_fraction >= 0))
+    throw std::invalid_argument(
+        "identifiable_subject: the marker noise must be positive, the threshold >= 0");
+  options.validate();
+  MarkerMapping mapping;
+  for (int m = 0; m < truth.marker_count(); ++m) mapping.point_of_marker.push_back(m);
+  detail::BundleAdjustment adjustment(nominal, mapping, recording, options,
+                                      marker_noise_mm * marker_noise_mm);
+
+  // The calibration frames at their true poses, each with its visible markers.
+  std::vector<detail::BundleFrame> adjusted;
+  for (long k : frames) {
+    if (k < 0 || k >= recording.frames())
+      throw std::invalid_argument("identifiable_subject: a calibration frame lies outside the recording");
+    const body::Pose& pose = recording.truth[static_cast<std::size_t>(k)];
+    detail::BundleFrame frame{k, pose.root_position, pose.root_rotation(), pose.joints, {}};
+    for (int m = 0; m < truth.marker_count(); ++m)
+      if (recording.visible(m, k) && recording.frame(k).col(m).allFinite()) frame.markers.push_back(m);
+    if (frame.markers.size() >= 3) adjusted.push_back(std::move(frame));
+  }
+  if (adjusted.empty())
+    throw std::invalid_argument("identifiable_subject: no calibration frame shows 3 markers");
+
+  // The nominal in the adjustment's unknowns at the true subject: length factors (nominal bone
+  // over true bone, least squares over the segment's bones, minus 1) and offsets (nominal - true).
+  const std::vector<std::string>& segments = adjustment.segments();
+  const int scales = static_cast<int>(segments.size());
+  Eigen::VectorXd nominal_step(scales + 3 * truth.marker_count());
+  for (int s = 0; s < scales; ++s) {
+    double cross = 0, square = 0;
+    for (std::size_t j = 0; j < truth.joints.size(); ++j)
+      if (body::segment_of_frame(truth, truth.joints[j].parent_frame) ==
+          segments[static_cast<std::size_t>(s)]) {
+        cross += nominal.joints[j].translation.dot(truth.joints[j].translation);
+        square += truth.joints[j].translation.squaredNorm();
+      }
+    nominal_step(s) = cross / square - 1.0;
+  }
+  for (int m = 0; m < truth.marker_count(); ++m)
+    nominal_step.segment<3>(scales + 3 * m) = nominal.markers[static_cast<std::size_t>(m)].offset -
+                                              truth.markers[static_cast<std::size_t>(m)].offset;
+
+  // Reset: the part of that step along the undetermined eigenvectors, in the priors' metric.
+  Eigen::VectorXd prior_sd;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(
+      adjustment.information_in_prior_metric(truth, adjusted, prior_sd));
+  if (eigen.info() != Eigen::Success)
+    throw std::runtime_error("identifiable_subject: the eigen-decomposition did not converge");
+  const Eigen::VectorXd whitened_step = nominal_step.cwiseQuotient(prior_sd);
+  Eigen::VectorXd reset = Eigen::VectorXd::Zero(whitened_step.size());
+  IdentifiableSubject result;
+  result.information_ratios = eigen.eigenvalues();
+  result.frames_used = static_cast<long>(adjusted.size());
+  result.threshold = adjustment.prior_only_threshold(prior_only_fraction, adjusted.size());
+  for (Eigen::Index i = 0; i < eigen.eigenvalues().size(); ++i) {
+    if (eigen.eigenvalues()(i) >= result.threshold) continue;
+    const auto v = eigen.eigenvectors().col(i);
+    reset += v * v.dot(whitened_step);
+    ++result.reset_directions;
+  }
+  reset = reset.cwiseProduct(prior_sd);
+
+  result.model = truth;
+  for (std::size_t j = 0; j < result.model.joints.size(); ++j) {
+    const std::string segment = body::segment_of_frame(truth, truth.joints[j].parent_frame);
+    for (int s = 0; s < scales; ++s)
+      if (segments[static_cast<std::size_t>(s)] == segment)
+        result.model.joints[j].translation *= 1.0 + reset(s);
+  }
+  for (int m = 0; m < truth.marker_count(); ++m)
+    result.model.markers[static_cast<std::size_t>(m)].offset += reset.segment<3>(scales + 3 * m);
+  return result;
+}
+#endif
+
+}  // namespace s2kf::track
