@@ -22,7 +22,7 @@ using s2kf::test_support::run_command;
 
 using s2kf::test_support::csv_rows;
 
-std::string scratch(const std::string& name) {
+std::string scratch_file(const std::string& name) {
   std::filesystem::create_directories(S2KF_TEST_TMP_DIR);
   return std::string(S2KF_TEST_TMP_DIR) + "/" + name;
 }
@@ -62,7 +62,7 @@ TEST(CommandModel, JointsFlagPrintsTheJointTable) {
 }
 
 TEST(CommandModel, JsonAndCsvPosesGiveTheSameMarkers) {
-  const std::string json = scratch("pose.json"), csv = scratch("pose.csv");
+  const std::string json = scratch_file("pose.json"), csv = scratch_file("pose.csv");
   std::ofstream(json)
       << R"({"root_position": [10, 20, 900], "root_rpy": [0.1, -0.2, 1.3], "joints": {"LKx": -1.5707963267948966, "RSx": 0.4}})";
   {
@@ -90,16 +90,16 @@ TEST(CommandModel, JsonAndCsvPosesGiveTheSameMarkers) {
 }
 
 TEST(CommandModel, BadPoseFilesAreUserErrorsNamingTheFile) {
-  const std::string unknown = scratch("unknown_joint.json"), broken = scratch("broken.json"),
-                    missing_column = scratch("missing.csv");
+  const std::string unknown = scratch_file("unknown_joint.json"), broken = scratch_file("broken.json"),
+                    missing_column = scratch_file("missing.csv");
   std::ofstream(unknown) << R"({"joints": {"LKneeX": 0.3}})";
   std::ofstream(broken) << R"({"joints": )";
   std::ofstream(missing_column) << "frame,time,root_x\n0,0,1\n";
-  for (const auto& [file, words] :
-       std::vector<std::pair<std::string, std::string>>{{unknown, "unknown joint 'LKneeX'"},
-                                                        {broken, "not valid JSON"},
-                                                        {missing_column, "no column root_y"},
-                                                        {scratch("does_not_exist.csv"), "cannot open"}}) {
+  for (const auto& [file, words] : std::vector<std::pair<std::string, std::string>>{
+           {unknown, "unknown joint 'LKneeX'"},
+           {broken, "not valid JSON"},
+           {missing_column, "no column root_y"},
+           {scratch_file("does_not_exist.csv"), "cannot open"}}) {
     const s2kf::test_support::CommandResult result = run_command("model --pose \"" + file + "\"");
     EXPECT_EQ(result.status, 1) << file;
     EXPECT_NE(result.output.find("s2kf: "), std::string::npos) << result.output;

@@ -1,6 +1,7 @@
 // `s2kf samples`: computes a sample set, loads it from the cache the second time, writes a CSV,
 // and refuses bad options with a sentence.
 #include "cli_runner.hpp"
+#include "test_files.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,11 +16,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // A fresh directory per test, so tests never see each other's files.
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "samples_command" / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
+fs::path fresh_scratch(const std::string& name) {
+  return s2kf::test_support::empty_scratch("samples_command/" + name);
 }
 
 // Runs the s2kf program and returns its output and exit status (cli_runner.hpp).
@@ -29,7 +27,7 @@ std::pair<std::string, int> run(const std::string& arguments) {
 }
 
 TEST(SamplesCommand, ComputesThenLoadsAndWritesCsv) {
-  const fs::path dir = scratch("cli");
+  const fs::path dir = fresh_scratch("cli");
   const std::string cache = " --cache-dir " + (dir / "cache").string();
   auto [first, status] = run("samples --dim 3 --count 11 --json" + cache);
   ASSERT_EQ(status, 0) << first;

@@ -29,16 +29,16 @@ constexpr double kNoiseMm = 10.0;  // the tracker's marker noise, the informatio
 // 11 gauges lie below 2e-6 of a seen marker coordinate's information, the next direction at 5e-5.
 constexpr double kExactGauges = 1e-5;
 
-struct Case {
+struct GaugeCase {
   sim::Subject subject;
   sim::Recording recording;
   std::vector<long> frames;  // the calibration frames
 };
 
-Case simulate(double soft_tissue_mm) {
+GaugeCase simulate_sweep(double soft_tissue_mm) {
   sim::SubjectOptions options;
   options.soft_tissue_mm = soft_tissue_mm;
-  Case c{sim::make_subject(body::mmm_body_model(1750), options, 7), {}, {}};
+  GaugeCase c{sim::make_subject(body::mmm_body_model(1750), options, 7), {}, {}};
   sim::RandomSweepOptions sweep;
   sweep.duration_s = 5;
   const sim::KeyframeMotion motion = sim::random_sweep_motion(7, c.subject.lower, c.subject.upper, sweep);
@@ -50,14 +50,6 @@ Case simulate(double soft_tissue_mm) {
   return c;
 }
 
-std::vector<int> markers_on(const body::BodyModel& model, const std::string& segment) {
-  std::vector<int> markers;
-  for (int m = 0; m < model.marker_count(); ++m)
-    if (body::segment_of_frame(model, model.markers[static_cast<std::size_t>(m)].frame) == segment)
-      markers.push_back(m);
-  return markers;
-}
-
 // The nominal: the true subject with the left foot's markers turned by a few degrees about the
 // ankle (the origin of the frame they ride on), one left-thigh marker moved by 12 mm and the left
 // thigh's bones 4 % longer.
@@ -65,10 +57,10 @@ body::BodyModel nominal_of(const body::BodyModel& truth, double foot_turn_rad) {
   body::BodyModel nominal = truth;
   const Eigen::Matrix3d turn =
       Eigen::AngleAxisd(foot_turn_rad, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).toRotationMatrix();
-  for (int m : markers_on(truth, "LA"))
+  for (int m : body::markers_on_segment(truth, "LA"))
     nominal.markers[static_cast<std::size_t>(m)].offset =
         turn * truth.markers[static_cast<std::size_t>(m)].offset;
-  nominal.markers[static_cast<std::size_t>(markers_on(truth, "LH").front())].offset +=
+  nominal.markers[static_cast<std::size_t>(body::markers_on_segment(truth, "LH").front())].offset +=
       Eigen::Vector3d(8, -6, 6);
   for (body::Joint& joint : nominal.joints)
     if (body::segment_of_frame(truth, joint.parent_frame) == "LH") joint.translation *= 1.04;
@@ -76,7 +68,8 @@ body::BodyModel nominal_of(const body::BodyModel& truth, double foot_turn_rad) {
 }
 
 TEST(IdentifiableSubjectReference, ResetsTheGaugeToTheNominalAndKeepsTheRest) {
-  const Case c = simulate(0);  // no soft tissue: the exact gauges are the only undetermined directions
+  const GaugeCase c =
+      simulate_sweep(0);  // no soft tissue: the exact gauges are the only undetermined directions
   const body::BodyModel& truth = c.subject.model;
   const double turn = 3 * M_PI / 180;
   const body::BodyModel nominal = nominal_of(truth, turn);
@@ -89,7 +82,7 @@ TEST(IdentifiableSubjectReference, ResetsTheGaugeToTheNominalAndKeepsTheRest) {
   EXPECT_EQ(identifiable.reset_directions, 11);
   EXPECT_EQ(identifiable.frames_used, static_cast<long>(c.frames.size()));
   ASSERT_EQ(identifiable.model.marker_count(), truth.marker_count());
-  const std::vector<int> foot = markers_on(truth, "LA");
+  const std::vector<int> foot = body::markers_on_segment(truth, "LA");
   ASSERT_GE(foot.size(), 3u);
   for (int m = 0; m < truth.marker_count(); ++m) {
     const auto u = static_cast<std::size_t>(m);
@@ -115,7 +108,7 @@ TEST(IdentifiableSubjectReference, ResetsTheGaugeToTheNominalAndKeepsTheRest) {
 }
 
 TEST(IdentifiableSubjectReference, WithoutAGaugeDifferenceIsTheTrueSubjectFit) {
-  const Case c = simulate(8);  // with soft tissue
+  const GaugeCase c = simulate_sweep(8);  // with soft tissue
   const body::BodyModel& truth = c.subject.model;
   const body::BodyModel nominal = nominal_of(truth, 0);  // the thigh only
   const track::IdentifiableSubject identifiable = track::identifiable_subject(
@@ -135,7 +128,7 @@ TEST(IdentifiableSubjectReference, WithoutAGaugeDifferenceIsTheTrueSubjectFit) {
 }
 
 TEST(IdentifiableSubjectReference, ThresholdZeroKeepsTheTrueSubject) {
-  const Case c = simulate(0);
+  const GaugeCase c = simulate_sweep(0);
   const body::BodyModel nominal = nominal_of(c.subject.model, 0.2);
   const track::IdentifiableSubject identifiable = track::identifiable_subject(
       nominal, c.subject, c.recording, c.frames, track::CalibrationOptions{}, kNoiseMm, 0);
@@ -146,7 +139,7 @@ TEST(IdentifiableSubjectReference, ThresholdZeroKeepsTheTrueSubject) {
 }
 
 TEST(IdentifiableSubjectReference, RefusesAnotherModelOrBadFrames) {
-  const Case c = simulate(0);
+  const GaugeCase c = simulate_sweep(0);
   body::BodyModel other = c.subject.model;
   other.markers.pop_back();
   EXPECT_THROW(

@@ -61,15 +61,6 @@ Synthetic make_synthetic(Eigen::Index frames, double soft_tissue_mm, std::uint64
   return s;
 }
 
-/// Offsets of the markers on `segment`, and the names of those markers' frames' last joints.
-std::vector<int> markers_on(const body::BodyModel& model, const std::string& segment) {
-  std::vector<int> markers;
-  for (int m = 0; m < model.marker_count(); ++m)
-    if (body::segment_of_frame(model, model.markers[static_cast<std::size_t>(m)].frame) == segment)
-      markers.push_back(m);
-  return markers;
-}
-
 /// Mean 3-D distance (mm) between the calibrated marker offsets and the subject's true ones, after
 /// undoing on the end segments what no recording can tell apart: a foot's markers turned about
 /// its ankle (3 joints: a constant offset of the ankle angles turns the foot back), a hand's turned
@@ -85,7 +76,7 @@ double offset_error(const body::BodyModel& model, const sim::Subject& subject, b
     if (std::find(segments.begin(), segments.end(), segment) == segments.end()) segments.push_back(segment);
   }
   for (const std::string& segment : segments) {
-    const std::vector<int> markers = markers_on(model, segment);
+    const std::vector<int> markers = body::markers_on_segment(model, segment);
     Eigen::Matrix3Xd estimate(3, static_cast<Eigen::Index>(markers.size())), truth = estimate;
     for (std::size_t k = 0; k < markers.size(); ++k) {
       estimate.col(static_cast<Eigen::Index>(k)) = model.markers[static_cast<std::size_t>(markers[k])].offset;

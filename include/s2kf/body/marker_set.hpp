@@ -79,6 +79,15 @@ inline std::string segment_of_frame(const BodyModel& model, int frame) {
   return frame == 0 ? std::string("root") : model.joints.at(static_cast<std::size_t>(frame - 1)).group;
 }
 
+/// The indices of the model's markers that ride on `segment` ("root", "LE", ...).
+inline std::vector<int> markers_on_segment(const BodyModel& model, const std::string& segment) {
+  std::vector<int> markers;
+  for (int m = 0; m < model.marker_count(); ++m)
+    if (segment_of_frame(model, model.markers[static_cast<std::size_t>(m)].frame) == segment)
+      markers.push_back(m);
+  return markers;
+}
+
 /// The name a marker-set file uses for a frame: the group name when the frame ends its group
 /// (what `frame_index(group)` finds), else the joint name ("LEx").
 inline std::string marker_set_frame_name(const BodyModel& model, int frame) {
