@@ -25,6 +25,7 @@ using namespace s2kf;
 using test_support::data_file;
 
 TEST(MarkersetCommand, InfersWritesTracksAndViews) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   namespace fs = std::filesystem;
   const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "inference";
   fs::create_directories(dir);

@@ -67,6 +67,9 @@ nlohmann::json scene_state(const std::string& dom) {
 class ViewerPage : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
+#ifdef S2KF_TEST_UNDER_ASAN
+    return;  // every test of the page skips itself there (SetUp): no need to track the recording
+#endif
     fs::remove_all(kWork);
     fs::create_directories(kWork);
     recording_ = (kWork / "handstand.c3d").string();
@@ -87,7 +90,10 @@ class ViewerPage : public ::testing::Test {
 
   static void TearDownTestSuite() { fs::remove_all(kWork); }
 
-  void SetUp() override { ASSERT_TRUE(fs::exists(plain_ + ".html")) << "the fixture's track --html failed"; }
+  void SetUp() override {
+    S2KF_SKIP_UNDER_SANITIZERS();
+    ASSERT_TRUE(fs::exists(plain_ + ".html")) << "the fixture's track --html failed";
+  }
 
   /// The page's scene state after opening `page` with `fragment`; fails the test on console errors.
   static nlohmann::json open_page(const std::string& page, const std::string& fragment) {
@@ -135,7 +141,6 @@ std::string ViewerPage::recording_, ViewerPage::truth_, ViewerPage::plain_, View
   if (!unavailable_.empty()) GTEST_SKIP() << "chromium cannot run: " << unavailable_
 
 TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
-  S2KF_SKIP_UNDER_SANITIZERS();
   SKIP_WITHOUT_CHROMIUM();
   const long frame = 100;
   // Only the skeleton: the markers and the truth would cover joint pixels.
@@ -194,7 +199,6 @@ TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
 }
 
 TEST_F(ViewerPage, TimelineMovesTheSkeleton) {
-  S2KF_SKIP_UNDER_SANITIZERS();
   SKIP_WITHOUT_CHROMIUM();
   const nlohmann::json state = open_page(plain_ + ".html", "#frame=10&scrub=120");
   ASSERT_TRUE(state.value("ok", false)) << state.dump();
@@ -209,7 +213,6 @@ TEST_F(ViewerPage, TimelineMovesTheSkeleton) {
 }
 
 TEST_F(ViewerPage, TruthIsShownAndTheDataLayoutIsAsDocumented) {
-  S2KF_SKIP_UNDER_SANITIZERS();
   const std::string page = page_text(plain_ + ".html");
   const std::size_t begin = page.find("<script type=\"application/json\" id=\"s2kf-meta\">");
   ASSERT_NE(begin, std::string::npos);
@@ -229,7 +232,6 @@ TEST_F(ViewerPage, TruthIsShownAndTheDataLayoutIsAsDocumented) {
 }
 
 TEST_F(ViewerPage, ViewRebuildsTheTrackedModelOfACalibratedRun) {
-  S2KF_SKIP_UNDER_SANITIZERS();
   // `s2kf view` rebuilds the calibrated subject from the summary and the recording; its page must
   // hold exactly the data of the page `track --html` wrote with the model in memory.
   const std::string tracked = page_text(calibrated_ + ".html");
@@ -248,7 +250,6 @@ TEST_F(ViewerPage, ViewRebuildsTheTrackedModelOfACalibratedRun) {
 }
 
 TEST_F(ViewerPage, LongMotionsAreDecimatedAndThePageSaysSo) {
-  S2KF_SKIP_UNDER_SANITIZERS();
   SKIP_WITHOUT_CHROMIUM();
   const std::string prefix = (kWork / "decimated").string();
   for (const char* suffix : {".csv", ".json"})
@@ -267,7 +268,6 @@ TEST_F(ViewerPage, LongMotionsAreDecimatedAndThePageSaysSo) {
 }
 
 TEST_F(ViewerPage, DamagedDataBlocksAreNamedOnThePage) {
-  S2KF_SKIP_UNDER_SANITIZERS();
   SKIP_WITHOUT_CHROMIUM();
   const std::string good = page_text(plain_ + ".html");
   const std::string marker = "id=\"s2kf-data\">";
@@ -305,7 +305,6 @@ TEST_F(ViewerPage, DamagedDataBlocksAreNamedOnThePage) {
 }
 
 TEST_F(ViewerPage, ViewOfABadPrefixSaysWhyAndWritesNothing) {
-  S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = kWork / "bad";
   fs::create_directories(dir);
   const std::string missing = (dir / "nothing").string();
