@@ -76,6 +76,14 @@ TEST(NumberText, FixedFormatEqualsTheOstreams) {
   // Beyond the buffer: the writer falls back to the ostream, with the same text.
   EXPECT_EQ(through_writer(-1.7976931348623157e308, 6, true),
             through_ostream(-1.7976931348623157e308, 6, true));
+  // ... and leaves the stream's format as it found it: the numbers written after it are the caller's.
+  std::ostringstream out;
+  out << std::setprecision(3);
+  s2kf::io::write_fixed(out, 1e300, 2);
+  out << ' ' << 1.0 / 3.0;
+  EXPECT_EQ(out.str().substr(out.str().size() - 6), " 0.333");
+  EXPECT_EQ(out.precision(), 3);
+  EXPECT_FALSE(out.flags() & std::ios_base::fixed);
   EXPECT_EQ(through_writer(12.5, 6, true), "12.500000");
   EXPECT_EQ(through_writer(0.1, 9, false), "0.1");
   EXPECT_EQ(through_writer(1.0 / 3.0, 9, false), "0.333333333");
