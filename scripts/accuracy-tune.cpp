@@ -6,14 +6,23 @@
 //   g++ -O2 -DNDEBUG -std=c++17 -Iinclude -Iexamples/s2kf -isystem /usr/include/eigen3 \
 //     -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp examples/s2kf/tracker_samples.cpp -o
 //     accuracy-tune
+// or, faster, against the compiled library (`cmake --build build --target s2kf_compiled`; the same
+// -march=native as that library, or Eigen's objects differ in layout and the program crashes):
+//   g++ -O2 -march=native -DNDEBUG -std=c++17 -DS2KF_COMPILED -Iinclude -Iexamples/s2kf \
+//     -isystem /usr/include/eigen3 -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp \
+//     examples/s2kf/tracker_samples.cpp build/libs2kf_compiled.a -lpthread -o build/accuracy-tune
 // Usage: accuracy-tune MOTION SEED OCCLUSION(0|1) SMOOTH(0|1) CALIBRATE(0|1) rw|cv
 //          [POSITION_ACC ORIENTATION_ACC JOINT_ACC POSITION_SPEED ORIENTATION_SPEED JOINT_SPEED
 //           REFERENCE(0|1) [INITIAL_RATE_SDS x3]]
 // Environment: OFFSET_SD, SCALE_SD (calibration priors), NOSCALE (offsets only), PRIOR_ONLY (the
 // calibration's prior_only_fraction), PRIOR_SHARE (prior_only_share: the fraction thresholds the
-// surviving share), SEGMENTS (per segment), DIRECTIONS (the directions left to the prior).
+// surviving share), PRIOR_OFFSETS (prior_only_offsets), SHRINK (weak_direction_shrink), SEGMENTS
+// (per segment), DIRECTIONS (the directions left to the prior), SUBJECT (the calibrated and the
+// nominal subject's offset and bone-length errors against the true subject), SOFT_TISSUE (the
+// subject's soft-tissue scale, mm).
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/sim/recording.hpp>
@@ -31,6 +40,7 @@ int main(int argc, char** argv) {
   const unsigned seed = std::atoi(argv[2]);
   const bool occl = std::atoi(argv[3]), smooth = std::atoi(argv[4]), calib = std::atoi(argv[5]);
   sim::SubjectOptions so;
+  if (const char* v = std::getenv("SOFT_TISSUE")) so.soft_tissue_mm = std::atof(v);
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(so.height_mm), so, seed);
   cli::JointTable joints{subject.joint_names, subject.lower, subject.upper};
   const auto motion =
@@ -45,6 +55,8 @@ int main(int argc, char** argv) {
   if (const char* v = std::getenv("NOSCALE")) opt.calibration.estimate_segment_scales = false;
   if (const char* v = std::getenv("PRIOR_ONLY")) opt.calibration.prior_only_fraction = std::atof(v);
   if (std::getenv("PRIOR_SHARE")) opt.calibration.prior_only_share = true;
+  if (std::getenv("PRIOR_OFFSETS")) opt.calibration.prior_only_offsets = true;
+  if (const char* v = std::getenv("SHRINK")) opt.calibration.weak_direction_shrink = std::atof(v);
   std::string model = argv[6];
   opt.tracker.motion_model =
       model == "cv" ? track::MotionModel::constant_velocity : track::MotionModel::random_walk;
@@ -91,6 +103,38 @@ int main(int argc, char** argv) {
         std::printf(" %s %.2g (%.0f%%)", d.segment.c_str(), d.information_ratio, 100 * d.share);
       std::printf("\n");
     }
+  if (std::getenv("SUBJECT") && calib) {  // the calibrated and the nominal subject against the true one
+    track::SessionOptions nominal_options = opt;
+    nominal_options.calibrate = false;
+    SequenceFrameSource source3(rec);
+    const body::BodyModel nominal = track::prepare_session(source3, set, nominal_options, samples).model;
+    const body::BodyModel& truth_model = subject.model;
+    std::map<std::string, std::pair<double, int>> nominal_error, calibrated_error;
+    for (const body::Marker& marker : truth_model.markers)
+      for (int k = 0; k < session.model.marker_count(); ++k) {
+        if (session.model.markers[k].name != marker.name || session.model.markers[k].frame != marker.frame)
+          continue;
+        const std::string segment = body::segment_of_frame(truth_model, marker.frame);
+        const double en = (nominal.markers[k].offset - marker.offset).norm();
+        const double ec = (session.model.markers[k].offset - marker.offset).norm();
+        std::printf(" marker %s (%s): offset error %.1f mm nominal, %.1f calibrated\n", marker.name.c_str(),
+                    segment.c_str(), en, ec);
+        nominal_error[segment].first += en * en, ++nominal_error[segment].second;
+        calibrated_error[segment].first += ec * ec, ++calibrated_error[segment].second;
+      }
+    for (const auto& [segment, e] : nominal_error)
+      std::printf(" segment %s: RMS offset error %.1f mm nominal, %.1f calibrated\n", segment.c_str(),
+                  std::sqrt(e.first / e.second),
+                  std::sqrt(calibrated_error[segment].first / calibrated_error[segment].second));
+    for (int j = 0; j < truth_model.joint_count(); ++j) {
+      const double length = truth_model.joints[j].translation.norm();
+      if (length > 0)
+        std::printf(" bone %s: length error %+.1f %% nominal, %+.1f %% calibrated\n",
+                    truth_model.joints[j].name.c_str(),
+                    100 * (nominal.joints[j].translation.norm() / length - 1),
+                    100 * (session.model.joints[j].translation.norm() / length - 1));
+    }
+  }
   if (std::getenv("SEGMENTS")) {
     for (const auto& [name, rms] : t.segment_rms_deg) std::printf(" %s %.1f", name.c_str(), rms);
     std::printf("\n");

@@ -82,6 +82,18 @@ struct CalibrationOptions {
   /// 0.1 made the segments of simulated subjects better and their flexion and root orientation
   /// worse (docs/tracking.md, "The identifiable-subject reference"), so it is not the default.
   bool prior_only_share = false;
+  /// With prior_only_share, the criterion applies to the marker-offset directions only (the share
+  /// counted with the length factors eliminated like the poses, their prior kept), and every
+  /// length factor is estimated.
+  bool prior_only_offsets = false;
+  /// Shrinkage towards the marker set in proportion to how weakly the data see a direction: an
+  /// extra prior c (x - x0)^T (C + P) (x - x0) on the subject's deviation x - x0 from the start, C
+  /// the data's subject information with the poses known and P the prior's (both at the first
+  /// linearisation). Along the generalised eigenvectors of S v = mu (C + P) v (S the information
+  /// with the poses eliminated) it keeps the fraction mu / (mu + c) of the data's step: a gauge
+  /// (mu = 0) stays at the marker set, a direction the poses do not trade with (mu near 1) moves
+  /// by 1 / (1 + c) of it. 0: none. With prior_only_offsets, on the offsets only.
+  double weak_direction_shrink = 0;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
   int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
   /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
@@ -106,6 +118,8 @@ struct CalibrationOptions {
       throw std::invalid_argument("calibration: the scale prior SD must be positive");
     if (!(prior_only_fraction >= 0 && prior_only_fraction < 1))
       throw std::invalid_argument("calibration: the prior-only fraction must lie in [0, 1)");
+    if (!(weak_direction_shrink >= 0) || !std::isfinite(weak_direction_shrink))
+      throw std::invalid_argument("calibration: the weak-direction shrinkage must be finite and >= 0");
     if (skip_frames < 0 || stride < 1)
       throw std::invalid_argument("calibration: skip_frames >= 0 and stride >= 1");
     if (threads < 1) throw std::invalid_argument("calibration: at least 1 thread is needed");
@@ -343,7 +357,11 @@ class BundleAdjustment {
       ++pass.bundle_iterations;
       bool accepted = false;
       linearise_all(model, frames, normal);
-      if (it == 0) choose_estimated_directions(model, normal, frames.size(), pass);
+      if (it == 0) {
+        choose_estimated_directions(model, normal, frames.size(), pass);
+        choose_shrinkage(normal);
+        current = cost(model, frames, cumulative_);  // with the shrinkage chosen now
+      }
       for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
         body::BodyModel trial_model = model;
         std::vector<BundleFrame> trial_frames = frames;
@@ -406,7 +424,22 @@ class BundleAdjustment {
       sum += offset_prior_[u] * (model.markers[m].offset - start_.markers[m].offset).squaredNorm();
     }
     for (double c : cumulative) sum += scale_weight_ * (c - 1) * (c - 1);
+    if (shrink_.size() > 0) {
+      const Eigen::VectorXd e = deviation(model, cumulative);
+      sum += e.dot(shrink_ * e);
+    }
     return sum;
+  }
+
+  /// The subject's deviation from the start, [length factors - 1, offsets - start offsets].
+  Eigen::VectorXd deviation(const body::BodyModel& model, const std::vector<double>& cumulative) const {
+    Eigen::VectorXd e(unknowns_);
+    for (int s = 0; s < scales_; ++s) e(s) = cumulative[static_cast<std::size_t>(s)] - 1.0;
+    for (std::size_t u = 0; u < used_.size(); ++u) {
+      const std::size_t m = static_cast<std::size_t>(used_[u]);
+      e.segment<3>(scales_ + 3 * static_cast<int>(u)) = model.markers[m].offset - start_.markers[m].offset;
+    }
+    return e;
   }
 
   /// One frame's normal equations: A (pose x pose), B (pose x subject), the pose gradient g, and
@@ -546,15 +579,29 @@ class BundleAdjustment {
     Eigen::VectorXd ratios;
     Eigen::MatrixXd vectors;
     double threshold = options_.prior_only_fraction;
+    // With prior_only_offsets the length factors are always estimated: the criterion looks at the
+    // offsets' block only, the lengths eliminated (with their prior) like the poses.
+    const int free = options_.prior_only_offsets && options_.prior_only_share ? scales_ : 0;
     if (options_.prior_only_share) {
       // S v = mu (C + P) v in the prior's metric (P = I): mu is the share of what the data would
       // tell with the poses known, plus the prior, that survives the poses' elimination.
       Eigen::MatrixXd known = prior_sd.asDiagonal() * normal.C * prior_sd.asDiagonal();
       known.diagonal().array() += 1.0;
-      const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information, known);
+      Eigen::MatrixXd surviving = information;
+      if (free > 0) {
+        const int n = unknowns_ - free;
+        Eigen::MatrixXd lengths = information.topLeftCorner(free, free);
+        lengths.diagonal().array() += 1.0;
+        surviving =
+            information.bottomRightCorner(n, n) -
+            information.bottomLeftCorner(n, free) * lengths.llt().solve(information.topRightCorner(free, n));
+        known = known.bottomRightCorner(n, n).eval();
+      }
+      const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eigen(surviving, known);
       if (eigen.info() != Eigen::Success) return;  // estimate every direction, as without the option
       ratios = eigen.eigenvalues();
-      vectors = eigen.eigenvectors();
+      vectors = Eigen::MatrixXd::Zero(unknowns_, ratios.size());
+      vectors.bottomRows(eigen.eigenvectors().rows()) = eigen.eigenvectors();
     } else {
       threshold = prior_only_threshold(options_.prior_only_fraction, frames);
       const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information);
@@ -563,7 +610,7 @@ class BundleAdjustment {
       vectors = eigen.eigenvectors();
     }
     std::vector<Eigen::Index> kept;
-    for (Eigen::Index i = 0; i < unknowns_; ++i) {
+    for (Eigen::Index i = 0; i < ratios.size(); ++i) {
       const double ratio = ratios(i);
       if (ratio >= threshold) {
         kept.push_back(i);
@@ -580,9 +627,29 @@ class BundleAdjustment {
                                             [](const auto& a, const auto& b) { return a.second < b.second; });
       pass.prior_only.push_back({ratio, largest->first, largest->second});
     }
-    estimated_.resize(unknowns_, static_cast<Eigen::Index>(kept.size()));
+    estimated_.setZero(unknowns_, free + static_cast<Eigen::Index>(kept.size()));
+    for (int s = 0; s < free; ++s) estimated_(s, s) = 1;
     for (std::size_t c = 0; c < kept.size(); ++c)
-      estimated_.col(static_cast<Eigen::Index>(c)) = prior_sd.asDiagonal() * vectors.col(kept[c]);
+      estimated_.col(free + static_cast<Eigen::Index>(c)) = prior_sd.asDiagonal() * vectors.col(kept[c]);
+  }
+
+  /// Sets `shrink_`, the weak-direction shrinkage prior c (C + P) (CalibrationOptions::
+  /// weak_direction_shrink), from the first linearisation; on the offsets only with
+  /// prior_only_offsets.
+  void choose_shrinkage(const NormalEquations& normal) {
+    shrink_.resize(0, 0);
+    if (options_.weak_direction_shrink <= 0) return;
+    shrink_ = normal.C;
+    for (int s = 0; s < scales_; ++s) shrink_(s, s) += scale_weight_;
+    for (std::size_t u = 0; u < used_.size(); ++u)
+      shrink_.block<3, 3>(scales_ + 3 * static_cast<int>(u), scales_ + 3 * static_cast<int>(u))
+          .diagonal()
+          .array() += offset_prior_[u];
+    if (options_.prior_only_offsets && scales_ > 0) {
+      shrink_.topRows(scales_).setZero();
+      shrink_.leftCols(scales_).setZero();
+    }
+    shrink_ *= options_.weak_direction_shrink;
   }
 
   /// A's Levenberg-Marquardt damping: relative to its diagonal, with a floor that keeps the
@@ -643,6 +710,12 @@ class BundleAdjustment {
       const double c = cumulative_[static_cast<std::size_t>(s)];
       C(s, s) += scale_weight * c * c;
       h(s) -= scale_weight * c * (c - 1.0);
+    }
+    if (shrink_.size() > 0) {  // the shrinkage prior on the deviation, whose Jacobian is diag(J)
+      Eigen::VectorXd J = Eigen::VectorXd::Ones(unknowns_);
+      for (int s = 0; s < scales_; ++s) J(s) = cumulative_[static_cast<std::size_t>(s)];
+      C += J.asDiagonal() * shrink_ * J.asDiagonal();
+      h -= J.asDiagonal() * (shrink_ * deviation(model, cumulative_));
     }
     damp(C, damping);
     reduced.triangularView<Eigen::Lower>() += C;
@@ -708,6 +781,7 @@ class BundleAdjustment {
   std::vector<double> weight_, offset_prior_;
   double noise_variance_ = 1;
   Eigen::MatrixXd estimated_;  ///< basis of the subject directions adjusted; empty: all of them
+  Eigen::MatrixXd shrink_;     ///< the weak-direction shrinkage prior; empty: none
   int scales_ = 0, unknowns_ = 0;
   double scale_weight_ = 0;
 };
