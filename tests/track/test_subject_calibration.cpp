@@ -216,6 +216,68 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
   }
 }
 
+// The weak-direction shrinkage (CalibrationOptions::weak_direction_shrink = c) keeps the fraction
+// mu / (mu + c) of the data's step along a direction whose share of information surviving the
+// poses' elimination is mu, and leaves the length factors free. A subject without soft tissue and
+// placement errors differs from the model in one marker of the chest (8 on that segment), moved
+// by 12 mm, and in one bone (the left thigh), 5 % longer. A single marker's displacement is partly absorbed
+// by the segment's rigid motion (6 of its 24 coordinates), so mu lies between about 0.7 and 1: with c = 1 the
+// marker moves between 0.7 / 1.7 = 0.41 and 1 / 2 of the way, with c = 0 all of it. A huge c keeps every
+// offset at the marker set, and the bone's length is still recovered.
+TEST(SubjectCalibration, WeakDirectionShrinkageKeepsTheShareMuOverMuPlusC) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  sim::SubjectOptions exact;
+  exact.placement_sd_mm = 0;
+  exact.segment_scale_sd = 0;
+  exact.soft_tissue_mm = 0;
+  exact.noise_sd_mm = 0.1;
+  const body::BodyModel model = body::mmm_body_model(1750);
+  sim::Subject subject = sim::make_subject(model, exact, 3);
+  const int moved = model.marker_index("LBAK");
+  const Eigen::Vector3d displacement(0, 12, 0);
+  subject.model.markers[static_cast<std::size_t>(moved)].offset += displacement;
+  const int longer = model.joint_index("LKx");  // the thigh: the knee's offset from the hip
+  subject.model.joints[static_cast<std::size_t>(longer)].translation *= 1.05;
+  sim::RandomSweepOptions sweep;
+  sweep.duration_s = 5;
+  const sim::KeyframeMotion motion = sim::random_sweep_motion(3, subject.lower, subject.upper, sweep);
+  sim::RecordingOptions recording_options;
+  recording_options.frame_rate = 100;
+  recording_options.frames = 400;
+  const sim::Recording recording = sim::simulate_recording(motion, subject, recording_options, 3);
+  const auto calibrated = [&](double c) {
+    track::CalibrationOptions options;
+    options.final_pass = false;
+    options.weak_direction_shrink = c;
+    return track::calibrate_subject(model, track::map_markers(recording.labels, model.marker_names()),
+                                    fast_options(), recording, test::tracker_samples(fast_options()),
+                                    options);
+  };
+  const auto fraction_moved = [&](const track::SubjectCalibration& calibration) {
+    const Eigen::Vector3d step = calibration.model.markers[static_cast<std::size_t>(moved)].offset -
+                                 model.markers[static_cast<std::size_t>(moved)].offset;
+    return step.dot(displacement) / displacement.squaredNorm();
+  };
+  const auto length_factor = [&](const track::SubjectCalibration& calibration) {
+    return calibration.model.joints[static_cast<std::size_t>(longer)].translation.norm() /
+           model.joints[static_cast<std::size_t>(longer)].translation.norm();
+  };
+  const track::SubjectCalibration none = calibrated(0), one = calibrated(1), huge = calibrated(1e6);
+  double largest_offset_move = 0;
+  for (std::size_t m = 0; m < model.markers.size(); ++m)
+    largest_offset_move =
+        std::max(largest_offset_move, (huge.model.markers[m].offset - model.markers[m].offset).norm());
+  std::cout << "marker moved " << fraction_moved(none) << " / " << fraction_moved(one) << " / "
+            << fraction_moved(huge) << " of the way, thigh length factor " << length_factor(none) << " / "
+            << length_factor(one) << " / " << length_factor(huge)
+            << " (c = 0 / 1 / 1e6); largest offset move at 1e6 " << largest_offset_move << " mm\n";
+  EXPECT_NEAR(fraction_moved(none), 1.0, 0.05);
+  EXPECT_GT(fraction_moved(one), 0.41);
+  EXPECT_LT(fraction_moved(one), 0.5);
+  EXPECT_LT(largest_offset_move, 0.01);
+  for (const auto* calibration : {&none, &one, &huge}) EXPECT_NEAR(length_factor(*calibration), 1.05, 0.01);
+}
+
 TEST(SubjectCalibration, LowersJointAngleErrorAndKeepsJointsInsideLimits) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const Synthetic s = make_synthetic(300, 8.0, 11);  // default soft tissue
