@@ -35,6 +35,7 @@ struct CalibrateSettings {
   long frames = 1200;
   bool quiet = false;
   bool no_scales = false;
+  double shrink = track::CalibrationOptions{}.weak_direction_shrink;
 };
 
 std::string fixed(double value, int precision) {
@@ -61,6 +62,7 @@ void run_calibrate(const CalibrateSettings& settings) {
   options.calibration.final_pass = true;
   options.calibration.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   options.calibration.estimate_segment_scales = !settings.no_scales;
+  options.calibration.weak_direction_shrink = settings.shrink;
   track::Session session;
   try {
     session =
@@ -108,6 +110,7 @@ void run_calibrate(const CalibrateSettings& settings) {
       {"frames", session.calibration_frames},
       {"stretches", session.calibration_stretches},
       {"iterations", settings.iterations},
+      {"weak_direction_shrink", settings.shrink},
       {"segment_scale", calibration.segment_scale},
       {"passes", passes},
       {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},
@@ -145,6 +148,10 @@ const RegisterCommand calibrate_registration{
           ->check(CLI::Range(10L, 1000000L));
       app.add_flag("--no-scales", settings->no_scales,
                    "keep the bone lengths, estimate the marker offsets only");
+      app.add_option("--shrink", settings->shrink,
+                     "pull the marker offsets the recording sees only weakly towards the marker set: "
+                     "a direction keeps mu / (mu + C) of the data's step (default 0.03; 0: none)")
+          ->check(CLI::Range(0.0, 1e6));
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
       app.callback([settings] { run_calibrate(*settings); });
     }};

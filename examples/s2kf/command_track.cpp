@@ -58,6 +58,7 @@ struct TrackSettings {
   std::string subject;    // a calibrated subject file (s2kf calibrate)
   bool calibrate = true;  // calibrate the subject on the recording first (not with --subject)
   int calibration_frames = 1200;
+  double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
   int calibration_threads = 1;  // set by run_track: every core for one recording, 1 in a batch
   bool smooth = false;
   long figure_frame = -1;  // >= 0: draw this frame
@@ -150,6 +151,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   session_options.height_mm = settings.height_mm;
   session_options.calibrate = settings.calibrate && settings.subject.empty();
   session_options.calibration_frames = settings.calibration_frames;
+  session_options.calibration.weak_direction_shrink = settings.calibration_shrink;
   session_options.calibration.threads = settings.calibration_threads;
   const SampleSet samples = cached_sample_set(46, session_options.tracker.samples);
   track::Session session;
@@ -274,6 +276,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   nlohmann::json summary = track_summary(input, settings.method, choice, messages, session, run,
                                          settings.smooth, warnings, outside);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
+  if (session.calibration) summary["calibration"]["weak_direction_shrink"] = settings.calibration_shrink;
   if (accuracy) {
     summary["truth"] = truth_json(*accuracy);
     summary["truth"]["warmup_frames"] = kTruthWarmupFrames;
@@ -377,6 +380,10 @@ const RegisterCommand track_registration{
       app.add_option("--calibration-frames", settings->calibration_frames,
                      "frames the calibration uses, in stretches spread over the recording (default 1200)")
           ->check(CLI::Range(10, 10000000));
+      app.add_option("--calibration-shrink", settings->calibration_shrink,
+                     "pull the marker offsets the recording sees only weakly towards the marker set: "
+                     "a direction keeps mu / (mu + C) of the data's step (default 0.03; 0: none)")
+          ->check(CLI::Range(0.0, 1e6));
       app.add_flag(
           "--smooth", settings->smooth,
           "offline Rauch-Tung-Striebel smoothing of the S2KF's motion (about 17 KB per frame in memory)");

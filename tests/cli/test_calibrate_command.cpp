@@ -10,7 +10,11 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 namespace {
@@ -44,6 +48,46 @@ TEST(CalibrateCommand, WritesASubjectFileThatLoads) {
       test_support::run_command("calibrate " + recording + " --markerset nope --out x.json");
   EXPECT_EQ(bad, 1);
   EXPECT_NE(bad_output.find("unknown marker set 'nope'"), std::string::npos) << bad_output;
+}
+
+// --shrink C sets the calibration's weak-direction shrinkage: a direction keeps mu / (mu + C) of
+// the data's step, so with a huge C the offsets stay where the marker set puts them and with 0 they
+// move freely; the report records the value, and a negative one is refused by name.
+TEST(CalibrateCommand, ShrinkOptionPullsTheOffsetsTowardsTheMarkerSet) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "shrink";
+  fs::create_directories(dir);
+  const std::string recording = std::string(S2KF_C3D_DATA_DIR) + "/85_02.c3d";
+  const auto calibrated = [&](const std::string& name, const std::string& options) {
+    const std::string subject = (dir / (name + ".json")).string();
+    const auto [status, output] = test_support::run_command("calibrate " + recording +
+                                                            " --frames 150 --quiet " + options + " --out " + subject);
+    EXPECT_EQ(status, 0) << output;
+    std::ifstream report((dir / (name + "_report.json")).string());
+    return std::make_pair(cli::load_marker_set(subject), nlohmann::json::parse(report));
+  };
+  const auto [free_set, free_report] = calibrated("free", "--shrink 0");
+  const auto [default_set, default_report] = calibrated("default", "");
+  const auto [held_set, held_report] = calibrated("held", "--shrink 1000000");
+  EXPECT_EQ(free_report["weak_direction_shrink"].get<double>(), 0.0);
+  EXPECT_EQ(default_report["weak_direction_shrink"].get<double>(), 0.03);
+  EXPECT_EQ(held_report["weak_direction_shrink"].get<double>(), 1e6);
+  // Offsets in the subject files are at the set's reference height; the three calibrations share
+  // the recording, the height and the lengths' freedom, so their offsets differ by the shrinkage.
+  const auto largest_difference = [](const body::MarkerSet& a, const body::MarkerSet& b) {
+    double largest = 0;
+    for (std::size_t m = 0; m < a.entries.size(); ++m)
+      largest = std::max(largest, (a.entries[m].offset - b.entries[m].offset).norm());
+    return largest;
+  };
+  ASSERT_EQ(free_set.entries.size(), held_set.entries.size());
+  EXPECT_GT(largest_difference(free_set, held_set), 5.0);
+  EXPECT_GT(largest_difference(free_set, default_set), 0.1);
+  const auto [bad, bad_output] =
+      test_support::run_command("calibrate " + recording + " --shrink -1 --out " + (dir / "bad.json").string());
+  EXPECT_NE(bad, 0);
+  EXPECT_NE(bad_output.find("--shrink"), std::string::npos) << bad_output;
+  EXPECT_FALSE(fs::exists(dir / "bad.json"));
 }
 
 }  // namespace
