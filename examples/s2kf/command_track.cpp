@@ -274,9 +274,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     }
   }
   nlohmann::json summary = track_summary(input, settings.method, choice, messages, session, run,
-                                         settings.smooth, warnings, outside);
+                                         settings.smooth, warnings, settings.calibration_shrink, outside);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
-  if (session.calibration) summary["calibration"]["weak_direction_shrink"] = settings.calibration_shrink;
   if (accuracy) {
     summary["truth"] = truth_json(*accuracy);
     summary["truth"]["warmup_frames"] = kTruthWarmupFrames;

@@ -39,7 +39,7 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
                                     const MarkerSetChoice& choice, const std::vector<std::string>& messages,
                                     const track::Session& session, const track::TrackingRun& run,
                                     bool smoothed, const std::vector<std::string>& warnings,
-                                    const track::StageTimes& outside = {}) {
+                                    double calibration_shrink, const track::StageTimes& outside = {}) {
   // Converged where the running median over the next second falls below 1.5 times the
   // recording's median; the mean over every tracked frame is reported as well.
   const long converged =
@@ -56,7 +56,8 @@ inline nlohmann::json track_summary(const std::string& input, const std::string&
         {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
         {"segment_scale", session.calibration->segment_scale},
         {"bundle_frames", session.calibration->passes.front().frames_used},
-        {"bundle_iterations", session.calibration->passes.front().bundle_iterations}};
+        {"bundle_iterations", session.calibration->passes.front().bundle_iterations},
+        {"weak_direction_shrink", calibration_shrink}};
   std::vector<double> latency_ms = run.seconds;
   for (double& s : latency_ms) s *= 1000;
   // Per marker the tracker left out at least once: how often, and why (MarkerRejection).

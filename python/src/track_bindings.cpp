@@ -71,6 +71,7 @@ struct TrackSettings {
   std::string markerset, subject;
   bool calibrate = true;
   std::int64_t calibration_frames = 1200;
+  double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
   bool smooth = false;
   int samples = 301;
   double height_mm = 0;
@@ -127,6 +128,7 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   session_options.height_mm = settings.height_mm;
   session_options.calibrate = settings.calibrate && settings.subject.empty();
   session_options.calibration_frames = settings.calibration_frames;
+  session_options.calibration.weak_direction_shrink = settings.calibration_shrink;
 
   auto result = std::make_unique<TrackResult>();
   result->name = name;
@@ -167,7 +169,7 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
 
   // The summary, field for field as `s2kf track` writes PREFIX.json (the same builder).
   result->summary = cli::track_summary(input, settings.method, choice, result->messages, session, run,
-                                       settings.smooth, warnings);
+                                       settings.smooth, warnings, settings.calibration_shrink);
   return result;
 }
 
@@ -181,6 +183,8 @@ void check_settings(const TrackSettings& settings) {
   if (settings.method != "s2kf" && settings.method != "baseline")
     throw py::value_error("method must be 's2kf' or 'baseline', not '" + settings.method + "'");
   if (settings.calibration_frames < 10) throw py::value_error("calibration_frames must be at least 10");
+  if (!(settings.calibration_shrink >= 0 && settings.calibration_shrink <= 1e6))
+    throw py::value_error("calibration_shrink must lie in [0, 1e6]");
 }
 
 std::unique_ptr<TrackResult> track(const py::object& recording, const py::object& labels_value,
@@ -389,7 +393,7 @@ void bind_track(py::module_& module) {
       "track",
       [](const py::object& recording, const py::object& labels, const py::object& rate,
          const py::object& markerset, const py::object& subject, bool calibrate,
-         std::int64_t calibration_frames, bool smooth, int samples, double height_mm,
+         std::int64_t calibration_frames, double calibration_shrink, bool smooth, int samples, double height_mm,
          const std::string& preset, const std::string& method, const py::object& model_output,
          const py::object& name) {
         TrackSettings settings;
@@ -397,6 +401,7 @@ void bind_track(py::module_& module) {
         settings.subject = subject.is_none() ? std::string() : py::str(subject).cast<std::string>();
         settings.calibrate = calibrate;
         settings.calibration_frames = calibration_frames;
+        settings.calibration_shrink = calibration_shrink;
         settings.smooth = smooth;
         settings.samples = samples;
         settings.height_mm = height_mm;
@@ -406,13 +411,15 @@ void bind_track(py::module_& module) {
       },
       py::arg("recording"), py::arg("labels") = py::none(), py::arg("rate") = py::none(), py::kw_only(),
       py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("calibrate") = true,
-      py::arg("calibration_frames") = 1200, py::arg("smooth") = false, py::arg("samples") = 301,
+      py::arg("calibration_frames") = 1200,
+      py::arg("calibration_shrink") = track::CalibrationOptions{}.weak_direction_shrink, py::arg("smooth") = false, py::arg("samples") = 301,
       py::arg("height_mm") = 0.0, py::arg("preset") = "default", py::arg("method") = "s2kf",
       py::arg("model_output") = py::none(), py::arg("name") = py::none(),
       "Tracks a whole recording as `s2kf track` does: track('walk.c3d'), track(s2kf.read_c3d(...)), or "
       "track(points, labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
       "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "
-      "calibrate: fit the subject's offsets and bone lengths on the first calibration_frames frames; smooth: "
+      "calibrate: fit the subject's offsets and bone lengths on the first calibration_frames frames; "
+      "calibration_shrink: C, a weakly seen offset direction keeps mu / (mu + C) of the data's step; smooth: "
       "RTS smoothing; height_mm: 0 estimates it; model_output: (P,) bool, points that are not markers. "
       "Runs without the GIL. Returns a TrackResult.");
 }

@@ -36,6 +36,7 @@ def test_handstand_as_the_program_tracks_it(cli, tmp_path, data_dir):
     same_as_program(cli, tmp_path, result, [path])
     summary = result.summary
     assert summary["marker_set"] == "kit" and summary["calibration"] is not None
+    assert summary["calibration"]["weak_direction_shrink"] == 0.03  # the default, recorded
     assert summary["frames_tracked"] == 675 and result.poses.shape == (675, 46)
     assert np.isfinite(result.joints).all()
     np.testing.assert_array_equal(result.poses[:, :3], result.root_position)
@@ -45,6 +46,15 @@ def test_handstand_as_the_program_tracks_it(cli, tmp_path, data_dir):
     predicted = result.model.marker_positions(result.poses)
     distance = np.linalg.norm(rec.points - predicted, axis=2).mean(axis=1)
     np.testing.assert_allclose(result.marker_distance, distance, rtol=1e-9)
+
+
+def test_calibration_shrink_as_the_program_takes_it(cli, tmp_path, data_dir):
+    path = str(data_dir / "handstand.c3d")
+    result = s2kf.track(path, calibration_shrink=0.0, calibration_frames=300)
+    same_as_program(cli, tmp_path, result, [path, "--calibration-shrink", "0", "--calibration-frames", "300"])
+    assert result.summary["calibration"]["weak_direction_shrink"] == 0.0
+    shrunk = s2kf.track(path, calibration_frames=300)
+    assert shrunk.summary["calibration"]["segment_scale"] != result.summary["calibration"]["segment_scale"]
 
 
 def test_points_in_memory_give_the_files_of_the_program(cli, tmp_path, data_dir):
@@ -107,6 +117,8 @@ def test_bad_recordings_are_python_errors(tmp_path, data_dir):
         s2kf.track(points, labels, rate, markerset=str(tmp_path / "mine.json"))
     with pytest.raises(ValueError, match="the frame rate must be a positive number of Hz"):
         s2kf.track(points, labels, -1.0)
+    with pytest.raises(ValueError, match=r"calibration_shrink must lie in \[0, 1e6\]"):
+        s2kf.track(points, labels, rate, calibration_shrink=-1.0)
     with pytest.raises(ValueError, match="method must be 's2kf' or 'baseline'"):
         s2kf.track(points, labels, rate, method="ukf")
 
