@@ -57,7 +57,8 @@ inline void only_keys(const nlohmann::json& object, const std::vector<std::strin
 inline body::MarkerSet marker_set_from_json(const nlohmann::json& document, const std::string& source) {
   using namespace marker_set_detail;
   if (!document.is_object()) throw std::invalid_argument(source + ": a marker set must be a JSON object");
-  only_keys(document, {"name", "description", "reference_height_mm", "height_mm", "segment_scale", "markers"},
+  only_keys(document,
+            {"name", "description", "reference_height_mm", "height_mm", "segment_scale", "joint_limits", "markers"},
             source);
   body::MarkerSet set;
   set.name = document.contains("name") ? text(document["name"], source + ": name")
@@ -73,6 +74,17 @@ inline body::MarkerSet marker_set_from_json(const nlohmann::json& document, cons
       throw std::invalid_argument(source + ": segment_scale must be an object {\"LS\": 1.02}");
     for (const auto& item : scales.items())
       set.segment_scale[item.key()] = number(item.value(), source + ": segment_scale." + item.key());
+  }
+  if (document.contains("joint_limits")) {
+    const auto& limits = document["joint_limits"];
+    if (!limits.is_object())
+      throw std::invalid_argument(source + ": joint_limits must be an object {\"LKx\": [-2.6, 0]} (radians)");
+    for (const auto& item : limits.items()) {
+      const std::string where = source + ": joint_limits." + item.key();
+      if (!item.value().is_array() || item.value().size() != 2)
+        throw std::invalid_argument(where + " must be [lower, upper] in radians");
+      set.joint_limits[item.key()] = {number(item.value()[0], where), number(item.value()[1], where)};
+    }
   }
   if (!document.contains("markers") || !document["markers"].is_array())
     throw std::invalid_argument(source + ": \"markers\" must be an array of marker entries");
@@ -118,6 +130,7 @@ inline nlohmann::json marker_set_to_json(const body::MarkerSet& set) {
   document["reference_height_mm"] = set.reference_height_mm;
   if (set.height_mm) document["height_mm"] = *set.height_mm;
   if (!set.segment_scale.empty()) document["segment_scale"] = set.segment_scale;
+  if (!set.joint_limits.empty()) document["joint_limits"] = set.joint_limits;
   nlohmann::json markers = nlohmann::json::array();
   for (const body::MarkerSetEntry& entry : set.entries) {
     nlohmann::json item = {{"label", entry.label}};
@@ -266,6 +279,7 @@ inline body::MarkerSet subject_marker_set(const body::MarkerSet& original, const
   }
   for (const auto& [segment, factor] : original.segment_scale)
     if (!set.segment_scale.count(segment)) set.segment_scale[segment] = factor;
+  set.joint_limits = original.joint_limits;  // the subject moves as the set said it may
   const double to_reference = 1000.0 / calibrated.height_mm;
   for (std::size_t m = 0; m < original.entries.size(); ++m) {
     body::MarkerSetEntry entry = original.entries[m];

@@ -63,6 +63,41 @@ TEST(MarkerSet, ParsingAndValidationNameTheProblem) {
                 .find("unknown segment"),
             std::string::npos);
   EXPECT_EQ(parse_error(R"({"markers": [{"label": "A", "like": "C7", "noise_mm": 5, "weight": 2}]})"), "");
+  // Joint limits: a known joint, two finite numbers, lower below upper, at most 2 pi apart.
+  const auto limits_error = [](const std::string& limits) {
+    return parse_error(R"({"joint_limits": )" + limits + R"(, "markers": [{"label": "A", "like": "C7"}]})");
+  };
+  EXPECT_NE(limits_error(R"({"XKx": [-1, 0]})").find("unknown joint 'XKx'"), std::string::npos);
+  EXPECT_NE(limits_error(R"({"LKx": [0, -2.6]})").find("lower < upper"), std::string::npos);
+  EXPECT_NE(limits_error(R"({"LKx": [-1, -1]})").find("lower < upper"), std::string::npos);
+  EXPECT_NE(limits_error(R"({"LKx": [-4, 3]})").find("at most 2 pi apart"), std::string::npos);
+  EXPECT_NE(limits_error(R"({"LKx": [-2.6]})").find("[lower, upper]"), std::string::npos);
+  EXPECT_NE(limits_error(R"([-2.6, 0])").find("joint_limits must be an object"), std::string::npos);
+  EXPECT_NE(limits_error(R"({"LKx": ["a", 0]})").find("joint_limits.LKx"), std::string::npos);
+  EXPECT_EQ(limits_error(R"({"LKx": [-2.6, 0], "RKx": [-2.6, 0.1]})"), "");
+}
+
+// joint_limits replace the model's range of the named joints only, and travel through the JSON
+// form and into the subject file s2kf calibrate writes.
+TEST(MarkerSet, JointLimitsReplaceTheModelsRange) {
+  body::MarkerSet set = cli::resolve_marker_set("cmu");
+  set.joint_limits["LKx"] = {-2.6, 0.0};
+  set.joint_limits["RAy"] = {-0.6, 0.5};
+  const body::BodyModel base = body::mmm_body_model(1750);
+  const body::BodyModel model = body::apply_marker_set(base, set);
+  for (int j = 0; j < base.joint_count(); ++j) {
+    const std::string& name = base.joints[j].name;
+    const double lower = name == "LKx" ? -2.6 : name == "RAy" ? -0.6 : base.joints[j].lower;
+    const double upper = name == "LKx" ? 0.0 : name == "RAy" ? 0.5 : base.joints[j].upper;
+    EXPECT_EQ(model.joints[j].lower, lower) << name;
+    EXPECT_EQ(model.joints[j].upper, upper) << name;
+  }
+  EXPECT_NE(base.joints[base.joint_index("LKx")].lower, -2.6);  // the model's own range differs
+  const body::MarkerSet again = cli::marker_set_from_json(cli::marker_set_to_json(set), "again");
+  EXPECT_EQ(again.joint_limits, set.joint_limits);
+  const body::MarkerSet subject = cli::subject_marker_set(set, model.scaled(1750), {}, "subject");
+  EXPECT_EQ(subject.joint_limits, set.joint_limits);
+  EXPECT_EQ(body::apply_marker_set(base, subject).joints[base.joint_index("LKx")].lower, -2.6);
 }
 
 TEST(MarkerSet, AppliedSetPutsMarkersWhereTheSetSays) {

@@ -7,11 +7,13 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/constants.hpp>
 #include <s2kf/core/label_text.hpp>
 
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <map>
@@ -48,6 +50,10 @@ struct MarkerSet {
   /// Per segment ("root" or a joint group): factor on the lengths of the bones leaving it (the
   /// translations of the child joints), on top of the height scaling.
   std::map<std::string, double> segment_scale;
+  /// Per joint ("LKx"): [lower, upper] in radians, replacing the model's range. For subjects or
+  /// motions past the model's ranges (the MMM knee stops at 130 degrees of flexion; a deep squat or
+  /// kneeling goes further), since the bounded joints never leave the range they are given.
+  std::map<std::string, std::array<double, 2>> joint_limits;
   std::vector<MarkerSetEntry> entries;
 
   std::vector<std::string> labels() const {
@@ -134,6 +140,14 @@ inline void validate_marker_set(const BodyModel& base, const MarkerSet& set) {
     if (!(entry.weight >= 0) || !std::isfinite(entry.weight))
       throw std::invalid_argument(where + ": marker " + entry.label + " has a negative or non-finite weight");
   }
+  for (const auto& [name, range] : set.joint_limits) {
+    if (base.joint_index(name) < 0)
+      throw std::invalid_argument(where + ": joint_limits names the unknown joint '" + name + "'");
+    if (!std::isfinite(range[0]) || !std::isfinite(range[1]) || !(range[0] < range[1]) ||
+        range[1] - range[0] > 2 * kPi)
+      throw std::invalid_argument(where + ": the limits of joint " + name +
+                                  " must be finite radians with lower < upper, at most 2 pi apart");
+  }
   for (const auto& [segment, factor] : set.segment_scale) {
     bool known = segment == "root";
     for (const Joint& joint : base.joints) known = known || joint.group == segment;
@@ -148,7 +162,7 @@ inline void validate_marker_set(const BodyModel& base, const MarkerSet& set) {
 /// The base model with its markers replaced by the set's, in the set's order. The set's offsets
 /// are scaled by base.height_mm / reference_height_mm; `like` positions are read from the base
 /// model's own markers (so `base` must carry them, e.g. mmm_body_model(height)). Segment scales
-/// multiply the translations of the joints leaving each segment.
+/// multiply the translations of the joints leaving each segment; joint limits replace the model's.
 inline BodyModel apply_marker_set(const BodyModel& base, const MarkerSet& set) {
   base.validate();
   validate_marker_set(base, set);
@@ -178,6 +192,10 @@ inline BodyModel apply_marker_set(const BodyModel& base, const MarkerSet& set) {
   for (Joint& joint : model.joints) {
     const auto found = set.segment_scale.find(segment_of_frame(base, joint.parent_frame));
     if (found != set.segment_scale.end()) joint.translation *= found->second;
+    if (const auto limits = set.joint_limits.find(joint.name); limits != set.joint_limits.end()) {
+      joint.lower = limits->second[0];
+      joint.upper = limits->second[1];
+    }
   }
   model.validate();
   return model;
