@@ -57,9 +57,10 @@ inline void only_keys(const nlohmann::json& object, const std::vector<std::strin
 inline body::MarkerSet marker_set_from_json(const nlohmann::json& document, const std::string& source) {
   using namespace marker_set_detail;
   if (!document.is_object()) throw std::invalid_argument(source + ": a marker set must be a JSON object");
-  only_keys(document,
-            {"name", "description", "reference_height_mm", "height_mm", "segment_scale", "joint_limits", "markers"},
-            source);
+  only_keys(
+      document,
+      {"name", "description", "reference_height_mm", "height_mm", "segment_scale", "joint_limits", "markers"},
+      source);
   body::MarkerSet set;
   set.name = document.contains("name") ? text(document["name"], source + ": name")
                                        : std::filesystem::path(source).stem().string();

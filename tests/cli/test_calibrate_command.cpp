@@ -60,8 +60,8 @@ TEST(CalibrateCommand, ShrinkOptionPullsTheOffsetsTowardsTheMarkerSet) {
   const std::string recording = std::string(S2KF_C3D_DATA_DIR) + "/85_02.c3d";
   const auto calibrated = [&](const std::string& name, const std::string& options) {
     const std::string subject = (dir / (name + ".json")).string();
-    const auto [status, output] = test_support::run_command("calibrate " + recording +
-                                                            " --frames 150 --quiet " + options + " --out " + subject);
+    const auto [status, output] = test_support::run_command(
+        "calibrate " + recording + " --frames 150 --quiet " + options + " --out " + subject);
     EXPECT_EQ(status, 0) << output;
     std::ifstream report((dir / (name + "_report.json")).string());
     return std::make_pair(cli::load_marker_set(subject), nlohmann::json::parse(report));
@@ -83,8 +83,8 @@ TEST(CalibrateCommand, ShrinkOptionPullsTheOffsetsTowardsTheMarkerSet) {
   ASSERT_EQ(free_set.entries.size(), held_set.entries.size());
   EXPECT_GT(largest_difference(free_set, held_set), 5.0);
   EXPECT_GT(largest_difference(free_set, default_set), 0.1);
-  const auto [bad, bad_output] =
-      test_support::run_command("calibrate " + recording + " --shrink -1 --out " + (dir / "bad.json").string());
+  const auto [bad, bad_output] = test_support::run_command("calibrate " + recording + " --shrink -1 --out " +
+                                                           (dir / "bad.json").string());
   EXPECT_NE(bad, 0);
   EXPECT_NE(bad_output.find("--shrink"), std::string::npos) << bad_output;
   EXPECT_FALSE(fs::exists(dir / "bad.json"));

@@ -198,9 +198,9 @@ TEST(TrackCommand, CalibratesByDefaultAndLowersTheMarkerDistance) {
   EXPECT_EQ(number_after("weak_direction_shrink"), 0.03);  // the default, recorded
   // --calibration-shrink 0 estimates every direction the data see freely: another subject.
   const fs::path free = scratch("calibrated") / "free";
-  const CommandResult unshrunk = run_command("track " + data_file("handstand.c3d") +
-                                             " --calibration-frames 300 --calibration-shrink 0 --formats csv --out " +
-                                             free.string());
+  const CommandResult unshrunk =
+      run_command("track " + data_file("handstand.c3d") +
+                  " --calibration-frames 300 --calibration-shrink 0 --formats csv --out " + free.string());
   ASSERT_EQ(unshrunk.status, 0) << unshrunk.output;
   const auto free_summary = nlohmann::json::parse(read_text(free.string() + ".json"));
   EXPECT_EQ(free_summary["calibration"]["weak_direction_shrink"].get<double>(), 0.0);

@@ -198,7 +198,8 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
     double offsets_mm, lengths, residual_mm;
   };
   const auto recovered = [&](const track::SubjectCalibration& calibration, const char* name) {
-    const Recovery r{offset_error(calibration.model, s.subject), worst_scale_error(calibration, s.subject, ratio),
+    const Recovery r{offset_error(calibration.model, s.subject),
+                     worst_scale_error(calibration, s.subject, ratio),
                      calibration.passes.back().rms_after_mm};
     std::cout << name << ": offset error " << r.offsets_mm << " mm, worst segment length error "
               << 100 * r.lengths << " %, RMS marker residual " << r.residual_mm << " mm\n";
@@ -214,9 +215,11 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
   const track::SubjectCalibration exact = calibrate(model, s, 0.0);
   std::map<std::string, double> ones;
   for (const auto& entry : exact.segment_scale) ones[entry.first] = 1.0;
-  const double before = offset_error(model, s.subject), scales_before = worst_scale_error(exact, s.subject, ratio, ones);
-  std::cout << "height " << height << " mm, estimated " << model.height_mm << " mm; nominal subject: offset error "
-            << before << " mm, worst segment length error " << 100 * scales_before << " %\n";
+  const double before = offset_error(model, s.subject),
+               scales_before = worst_scale_error(exact, s.subject, ratio, ones);
+  std::cout << "height " << height << " mm, estimated " << model.height_mm
+            << " mm; nominal subject: offset error " << before << " mm, worst segment length error "
+            << 100 * scales_before << " %\n";
   EXPECT_GT(before, 10.0);         // the subject really differs from the model
   EXPECT_GT(scales_before, 0.02);  // ... and its segments too
   // Without the shrinkage every direction the data see is estimated: the targets, offsets
@@ -341,7 +344,8 @@ TEST(SubjectCalibration, RejectsInputsThatCannotBeCalibrated) {
       track::calibrate_subject(model, mapping, fast_options(), one, samples, shrinking);
       ADD_FAILURE() << "a weak-direction shrinkage of " << shrink << " was accepted";
     } catch (const std::invalid_argument& error) {
-      EXPECT_NE(std::string(error.what()).find("weak-direction shrinkage"), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find("weak-direction shrinkage"), std::string::npos)
+          << error.what();
     }
   }
   track::MarkerMapping short_mapping = mapping;
