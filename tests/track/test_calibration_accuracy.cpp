@@ -18,6 +18,7 @@
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
+#include "sweep_recording.hpp"
 #include "tracker_samples.hpp"
 
 #include <gtest/gtest.h>
@@ -104,13 +105,7 @@ struct Simulated {
 
 Simulated simulated(std::uint64_t seed) {
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), sim::SubjectOptions{}, seed);
-  sim::RandomSweepOptions sweep;
-  sweep.duration_s = 8;
-  const sim::KeyframeMotion motion = sim::random_sweep_motion(seed, subject.lower, subject.upper, sweep);
-  sim::RecordingOptions options;
-  options.frame_rate = 100;
-  options.frames = 700;
-  Simulated s{sim::simulate_recording(motion, subject, options, seed), {}};
+  Simulated s{test_support::sweep_recording(subject, seed, 700, 8.0), {}};
   s.truth = sim::truth_motion(s.recording, body::mmm_body_model(1750).joint_names());
   return s;
 }
@@ -123,13 +118,7 @@ void expect_the_model_gauges(track::CalibrationOptions options, const char* crit
   sim::SubjectOptions without_soft_tissue;
   without_soft_tissue.soft_tissue_mm = 0;
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), without_soft_tissue, 7);
-  sim::RandomSweepOptions sweep;
-  sweep.duration_s = 5;
-  const sim::KeyframeMotion motion = sim::random_sweep_motion(7, subject.lower, subject.upper, sweep);
-  sim::RecordingOptions recording_options;
-  recording_options.frame_rate = 100;
-  recording_options.frames = 400;
-  const sim::Recording recording = sim::simulate_recording(motion, subject, recording_options, 7);
+  const sim::Recording recording = test_support::sweep_recording(subject, 7, 400, 5.0);
   const body::BodyModel model = body::mmm_body_model(1750);
   track::TrackerOptions tracker;
   tracker.samples = 101;

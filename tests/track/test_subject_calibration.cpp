@@ -12,6 +12,7 @@
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
+#include "sweep_recording.hpp"
 #include "tracker_samples.hpp"
 
 #include <gtest/gtest.h>
@@ -48,13 +49,8 @@ Synthetic make_synthetic(Eigen::Index frames, double soft_tissue_mm, std::uint64
   subject_options.soft_tissue_mm = soft_tissue_mm;
   subject_options.height_mm = height_mm;
   s.subject = sim::make_subject(body::mmm_body_model(1750), subject_options, seed);
-  sim::RandomSweepOptions sweep;
-  sweep.duration_s = static_cast<double>(frames) / 100.0 + 1.0;
-  const sim::KeyframeMotion motion = sim::random_sweep_motion(seed, s.subject.lower, s.subject.upper, sweep);
-  sim::RecordingOptions options;
-  options.frame_rate = 100;
-  options.frames = frames;
-  s.recording = sim::simulate_recording(motion, s.subject, options, seed);
+  s.recording =
+      test_support::sweep_recording(s.subject, seed, frames, static_cast<double>(frames) / 100.0 + 1.0);
   for (Eigen::Index k = 0; k < frames; ++k) {
     s.points.push_back(s.recording.frame(k));
     s.visible.push_back(s.recording.visible.col(k));
@@ -262,13 +258,7 @@ TEST(SubjectCalibration, WeakDirectionShrinkageKeepsTheShareMuOverMuPlusC) {
   subject.model.markers[static_cast<std::size_t>(moved)].offset += displacement;
   const int longer = model.joint_index("LKx");  // the thigh: the knee's offset from the hip
   subject.model.joints[static_cast<std::size_t>(longer)].translation *= 1.05;
-  sim::RandomSweepOptions sweep;
-  sweep.duration_s = 5;
-  const sim::KeyframeMotion motion = sim::random_sweep_motion(3, subject.lower, subject.upper, sweep);
-  sim::RecordingOptions recording_options;
-  recording_options.frame_rate = 100;
-  recording_options.frames = 400;
-  const sim::Recording recording = sim::simulate_recording(motion, subject, recording_options, 3);
+  const sim::Recording recording = test_support::sweep_recording(subject, 3, 400, 5.0);
   const auto calibrated = [&](double c) {
     track::CalibrationOptions options;
     options.final_pass = false;
