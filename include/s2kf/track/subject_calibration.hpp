@@ -428,19 +428,18 @@ class BundleAdjustment {
     }
     for (double c : cumulative) sum += scale_weight_ * (c - 1) * (c - 1);
     if (shrink_.size() > 0) {
-      const Eigen::VectorXd e = deviation(model, cumulative);
+      const Eigen::VectorXd e = offset_deviation(model);
       sum += e.dot(shrink_ * e);
     }
     return sum;
   }
 
-  /// The subject's deviation from the start, [length factors - 1, offsets - start offsets].
-  Eigen::VectorXd deviation(const body::BodyModel& model, const std::vector<double>& cumulative) const {
-    Eigen::VectorXd e(unknowns_);
-    for (int s = 0; s < scales_; ++s) e(s) = cumulative[static_cast<std::size_t>(s)] - 1.0;
+  /// The used markers' offsets minus the marker set's, stacked as the subject unknowns order them.
+  Eigen::VectorXd offset_deviation(const body::BodyModel& model) const {
+    Eigen::VectorXd e(3 * static_cast<Eigen::Index>(used_.size()));
     for (std::size_t u = 0; u < used_.size(); ++u) {
       const std::size_t m = static_cast<std::size_t>(used_[u]);
-      e.segment<3>(scales_ + 3 * static_cast<int>(u)) = model.markers[m].offset - start_.markers[m].offset;
+      e.segment<3>(3 * static_cast<Eigen::Index>(u)) = model.markers[m].offset - start_.markers[m].offset;
     }
     return e;
   }
@@ -636,21 +635,17 @@ class BundleAdjustment {
       estimated_.col(free + static_cast<Eigen::Index>(c)) = prior_sd.asDiagonal() * vectors.col(kept[c]);
   }
 
-  /// Sets `shrink_`, the weak-direction shrinkage prior c (C + P) on the offsets
-  /// (CalibrationOptions::weak_direction_shrink), from the first linearisation.
+  /// Sets `shrink_`, the weak-direction shrinkage prior c (C + P) on the offsets (the offsets'
+  /// block of the subject unknowns; CalibrationOptions::weak_direction_shrink), from the first
+  /// linearisation.
   void choose_shrinkage(const NormalEquations& normal) {
     shrink_.resize(0, 0);
     if (options_.weak_direction_shrink <= 0) return;
-    shrink_ = normal.C;
-    for (int s = 0; s < scales_; ++s) shrink_(s, s) += scale_weight_;
+    const int offsets = unknowns_ - scales_;
+    shrink_ = normal.C.bottomRightCorner(offsets, offsets);
     for (std::size_t u = 0; u < used_.size(); ++u)
-      shrink_.block<3, 3>(scales_ + 3 * static_cast<int>(u), scales_ + 3 * static_cast<int>(u))
-          .diagonal()
-          .array() += offset_prior_[u];
-    if (scales_ > 0) {
-      shrink_.topRows(scales_).setZero();
-      shrink_.leftCols(scales_).setZero();
-    }
+      shrink_.block<3, 3>(3 * static_cast<int>(u), 3 * static_cast<int>(u)).diagonal().array() +=
+          offset_prior_[u];
     shrink_ *= options_.weak_direction_shrink;
   }
 
@@ -713,11 +708,10 @@ class BundleAdjustment {
       C(s, s) += scale_weight * c * c;
       h(s) -= scale_weight * c * (c - 1.0);
     }
-    if (shrink_.size() > 0) {  // the shrinkage prior on the deviation, whose Jacobian is diag(J)
-      Eigen::VectorXd J = Eigen::VectorXd::Ones(unknowns_);
-      for (int s = 0; s < scales_; ++s) J(s) = cumulative_[static_cast<std::size_t>(s)];
-      C += J.asDiagonal() * shrink_ * J.asDiagonal();
-      h -= J.asDiagonal() * (shrink_ * deviation(model, cumulative_));
+    if (shrink_.size() > 0) {  // the shrinkage prior on the offsets' deviation (Jacobian I)
+      const int offsets = unknowns_ - scales_;
+      C.bottomRightCorner(offsets, offsets) += shrink_;
+      h.tail(offsets) -= shrink_ * offset_deviation(model);
     }
     damp(C, damping);
     reduced.triangularView<Eigen::Lower>() += C;
@@ -783,7 +777,7 @@ class BundleAdjustment {
   std::vector<double> weight_, offset_prior_;
   double noise_variance_ = 1;
   Eigen::MatrixXd estimated_;  ///< basis of the subject directions adjusted; empty: all of them
-  Eigen::MatrixXd shrink_;     ///< the weak-direction shrinkage prior; empty: none
+  Eigen::MatrixXd shrink_;     ///< the weak-direction shrinkage prior on the offsets; empty: none
   int scales_ = 0, unknowns_ = 0;
   double scale_weight_ = 0;
 };
