@@ -28,6 +28,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/core/label_text.hpp>
 #include <s2kf/core/sample_set.hpp>
@@ -35,8 +36,13 @@
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/track/rigid_clusters.hpp>
 #include <s2kf/track/segment_rigidity.hpp>
+#include <s2kf/track/tracker_options.hpp>
+// Only the definitions below track recordings; a file that links the compiled library sees the
+// declaration and does not parse the session and the tracker for it (compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
 #include <s2kf/track/session.hpp>
 #include <s2kf/track/tracker.hpp>
+#endif
 
 #include <Eigen/Core>
 
@@ -109,6 +115,15 @@ struct InferredMarkerSet {
   std::vector<std::string> notes;         ///< what was done, one sentence each
 };
 
+/// Infers a marker set for `recording` (labels as recorded; points with empty labels, model
+/// outputs, are left out). Throws std::invalid_argument with one sentence when the recording
+/// cannot be labelled unambiguously: too few markers or frames, one rigid cluster, no frame with a
+/// clear facing direction, or markers that ride rigidly on no segment.
+InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const SampleSet& samples,
+                                   const MarkerSetInferenceOptions& options = {});
+
+// The definitions: inline here by default, or compiled once (compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
 namespace detail {
 
 /// A place on the body where some lab puts a marker: its frame and where it is at the zero pose of
@@ -356,12 +371,8 @@ inline FrameSpread track_and_measure(const MarkerSequence& recording, const std:
 
 }  // namespace detail
 
-/// Infers a marker set for `recording` (labels as recorded; points with empty labels, model
-/// outputs, are left out). Throws std::invalid_argument with one sentence when the recording
-/// cannot be labelled unambiguously: too few markers or frames, one rigid cluster, no frame with a
-/// clear facing direction, or markers that ride rigidly on no segment.
-inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const SampleSet& samples,
-                                          const MarkerSetInferenceOptions& options = {}) {
+S2KF_INLINE InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const SampleSet& samples,
+                                               const MarkerSetInferenceOptions& options) {
   const body::BodyModel base = body::mmm_body_model(1000);
   std::vector<int> points;
   std::map<std::string, int> seen;
@@ -723,5 +734,7 @@ inline InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const
   result.set = set;
   return result;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track
