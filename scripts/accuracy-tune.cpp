@@ -16,7 +16,7 @@
 //           REFERENCE(0|1) [INITIAL_RATE_SDS x3]]
 // Environment: OFFSET_SD, SCALE_SD (calibration priors), NOSCALE (offsets only), PRIOR_ONLY (the
 // calibration's prior_only_fraction), PRIOR_SHARE (prior_only_share: the fraction thresholds the
-// surviving share), PRIOR_OFFSETS (prior_only_offsets), SHRINK (weak_direction_shrink), SEGMENTS
+// surviving share), SHRINK (weak_direction_shrink), SEGMENTS
 // (per segment), DIRECTIONS (the directions left to the prior), SUBJECT (the calibrated and the
 // nominal subject's offset and bone-length errors against the true subject), SOFT_TISSUE (the
 // subject's soft-tissue scale, mm).
@@ -55,7 +55,6 @@ int main(int argc, char** argv) {
   if (const char* v = std::getenv("NOSCALE")) opt.calibration.estimate_segment_scales = false;
   if (const char* v = std::getenv("PRIOR_ONLY")) opt.calibration.prior_only_fraction = std::atof(v);
   if (std::getenv("PRIOR_SHARE")) opt.calibration.prior_only_share = true;
-  if (std::getenv("PRIOR_OFFSETS")) opt.calibration.prior_only_offsets = true;
   if (const char* v = std::getenv("SHRINK")) opt.calibration.weak_direction_shrink = std::atof(v);
   std::string model = argv[6];
   opt.tracker.motion_model =

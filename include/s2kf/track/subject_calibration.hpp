@@ -82,10 +82,6 @@ struct CalibrationOptions {
   /// 0.1 made the segments of simulated subjects better and their flexion and root orientation
   /// worse (docs/tracking.md, "The identifiable-subject reference"), so it is not the default.
   bool prior_only_share = false;
-  /// With prior_only_share, the criterion applies to the marker-offset directions only (the share
-  /// counted with the length factors eliminated like the poses, their prior kept), and every
-  /// length factor is estimated.
-  bool prior_only_offsets = false;
   /// Shrinkage of the marker offsets towards the marker set in proportion to how weakly the data
   /// see a direction: an extra prior c (x - x0)^T (C + P) (x - x0) on the offsets' deviation x - x0
   /// from the marker set, C the data's information on the offsets with the poses known and P the
@@ -581,29 +577,15 @@ class BundleAdjustment {
     Eigen::VectorXd ratios;
     Eigen::MatrixXd vectors;
     double threshold = options_.prior_only_fraction;
-    // With prior_only_offsets the length factors are always estimated: the criterion looks at the
-    // offsets' block only, the lengths eliminated (with their prior) like the poses.
-    const int free = options_.prior_only_offsets && options_.prior_only_share ? scales_ : 0;
     if (options_.prior_only_share) {
       // S v = mu (C + P) v in the prior's metric (P = I): mu is the share of what the data would
       // tell with the poses known, plus the prior, that survives the poses' elimination.
       Eigen::MatrixXd known = prior_sd.asDiagonal() * normal.C * prior_sd.asDiagonal();
       known.diagonal().array() += 1.0;
-      Eigen::MatrixXd surviving = information;
-      if (free > 0) {
-        const int n = unknowns_ - free;
-        Eigen::MatrixXd lengths = information.topLeftCorner(free, free);
-        lengths.diagonal().array() += 1.0;
-        surviving =
-            information.bottomRightCorner(n, n) -
-            information.bottomLeftCorner(n, free) * lengths.llt().solve(information.topRightCorner(free, n));
-        known = known.bottomRightCorner(n, n).eval();
-      }
-      const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eigen(surviving, known);
+      const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information, known);
       if (eigen.info() != Eigen::Success) return;  // estimate every direction, as without the option
       ratios = eigen.eigenvalues();
-      vectors = Eigen::MatrixXd::Zero(unknowns_, ratios.size());
-      vectors.bottomRows(eigen.eigenvectors().rows()) = eigen.eigenvectors();
+      vectors = eigen.eigenvectors();
     } else {
       threshold = prior_only_threshold(options_.prior_only_fraction, frames);
       const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information);
@@ -612,7 +594,7 @@ class BundleAdjustment {
       vectors = eigen.eigenvectors();
     }
     std::vector<Eigen::Index> kept;
-    for (Eigen::Index i = 0; i < ratios.size(); ++i) {
+    for (Eigen::Index i = 0; i < unknowns_; ++i) {
       const double ratio = ratios(i);
       if (ratio >= threshold) {
         kept.push_back(i);
@@ -629,10 +611,9 @@ class BundleAdjustment {
                                             [](const auto& a, const auto& b) { return a.second < b.second; });
       pass.prior_only.push_back({ratio, largest->first, largest->second});
     }
-    estimated_.setZero(unknowns_, free + static_cast<Eigen::Index>(kept.size()));
-    for (int s = 0; s < free; ++s) estimated_(s, s) = 1;
+    estimated_.resize(unknowns_, static_cast<Eigen::Index>(kept.size()));
     for (std::size_t c = 0; c < kept.size(); ++c)
-      estimated_.col(free + static_cast<Eigen::Index>(c)) = prior_sd.asDiagonal() * vectors.col(kept[c]);
+      estimated_.col(static_cast<Eigen::Index>(c)) = prior_sd.asDiagonal() * vectors.col(kept[c]);
   }
 
   /// Sets `shrink_`, the weak-direction shrinkage prior c (C + P) on the offsets (the offsets'
