@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <s2kf/core/compilation_mode.hpp>
 
 #include <cmath>
 #include <optional>
@@ -117,42 +118,11 @@ struct BodyModel {
   }
 
   /// The same body at another height: every length multiplied by new_height_mm / height_mm.
-  BodyModel scaled(double new_height_mm) const {
-    if (!(new_height_mm > 0) || !std::isfinite(new_height_mm))
-      throw std::invalid_argument(
-          "BodyModel::scaled: the height must be a positive number of millimetres, got " +
-          std::to_string(new_height_mm));
-    BodyModel result = *this;
-    const double factor = new_height_mm / height_mm;
-    result.height_mm = new_height_mm;
-    for (auto& joint : result.joints) joint.translation *= factor;
-    for (auto& marker : result.markers) marker.offset *= factor;
-    return result;
-  }
+  BodyModel scaled(double new_height_mm) const;
 
   /// Throws std::invalid_argument naming the first broken rule: parents before children, frame
   /// indices in range, finite numbers, lower <= upper.
-  void validate() const {
-    if (!(height_mm > 0) || !std::isfinite(height_mm))
-      throw std::invalid_argument("BodyModel: height_mm must be positive and finite");
-    for (int j = 0; j < joint_count(); ++j) {
-      const Joint& joint = joints[j];
-      if (joint.parent_frame < 0 || joint.parent_frame > j)
-        throw std::invalid_argument("BodyModel: joint " + joint.name + " has parent frame " +
-                                    std::to_string(joint.parent_frame) + ", which is not an earlier frame");
-      if (!joint.translation.allFinite() || !std::isfinite(joint.lower) || !std::isfinite(joint.upper))
-        throw std::invalid_argument("BodyModel: joint " + joint.name + " has a non-finite number");
-      if (joint.lower > joint.upper)
-        throw std::invalid_argument("BodyModel: joint " + joint.name + " has lower limit above upper limit");
-    }
-    for (const Marker& marker : markers) {
-      if (marker.frame < 0 || marker.frame >= frame_count())
-        throw std::invalid_argument("BodyModel: marker " + marker.name + " rides on frame " +
-                                    std::to_string(marker.frame) + ", which does not exist");
-      if (!marker.offset.allFinite())
-        throw std::invalid_argument("BodyModel: marker " + marker.name + " has a non-finite offset");
-    }
-  }
+  void validate() const;
 };
 
 namespace mmm {
@@ -282,7 +252,47 @@ inline constexpr MarkerRow kMarkerTable[kMarkerCount] = {
 
 /// The 40-joint, 50-marker MMM-style model for a subject of the given height (mm): joints in the
 /// state order of the spec, markers in the order of the marker table.
-inline BodyModel mmm_body_model(double height_mm = 1750) {
+BodyModel mmm_body_model(double height_mm = 1750);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE BodyModel BodyModel::scaled(double new_height_mm) const {
+  if (!(new_height_mm > 0) || !std::isfinite(new_height_mm))
+    throw std::invalid_argument(
+        "BodyModel::scaled: the height must be a positive number of millimetres, got " +
+        std::to_string(new_height_mm));
+  BodyModel result = *this;
+  const double factor = new_height_mm / height_mm;
+  result.height_mm = new_height_mm;
+  for (auto& joint : result.joints) joint.translation *= factor;
+  for (auto& marker : result.markers) marker.offset *= factor;
+  return result;
+}
+
+S2KF_INLINE void BodyModel::validate() const {
+  if (!(height_mm > 0) || !std::isfinite(height_mm))
+    throw std::invalid_argument("BodyModel: height_mm must be positive and finite");
+  for (int j = 0; j < joint_count(); ++j) {
+    const Joint& joint = joints[j];
+    if (joint.parent_frame < 0 || joint.parent_frame > j)
+      throw std::invalid_argument("BodyModel: joint " + joint.name + " has parent frame " +
+                                  std::to_string(joint.parent_frame) + ", which is not an earlier frame");
+    if (!joint.translation.allFinite() || !std::isfinite(joint.lower) || !std::isfinite(joint.upper))
+      throw std::invalid_argument("BodyModel: joint " + joint.name + " has a non-finite number");
+    if (joint.lower > joint.upper)
+      throw std::invalid_argument("BodyModel: joint " + joint.name + " has lower limit above upper limit");
+  }
+  for (const Marker& marker : markers) {
+    if (marker.frame < 0 || marker.frame >= frame_count())
+      throw std::invalid_argument("BodyModel: marker " + marker.name + " rides on frame " +
+                                  std::to_string(marker.frame) + ", which does not exist");
+    if (!marker.offset.allFinite())
+      throw std::invalid_argument("BodyModel: marker " + marker.name + " has a non-finite offset");
+  }
+}
+
+S2KF_INLINE BodyModel mmm_body_model(double height_mm) {
   // Build at 1000 mm, where the table numbers live, then scale once.
   BodyModel model;
   model.height_mm = 1000;
@@ -330,5 +340,7 @@ inline BodyModel mmm_body_model(double height_mm = 1750) {
   }
   return model.scaled(height_mm);
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::body

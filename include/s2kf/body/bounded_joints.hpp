@@ -4,6 +4,7 @@
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
 
 #include <Eigen/Core>
@@ -59,40 +60,14 @@ struct BoundedJoints {
   }
 
   /// theta for every joint.
-  Eigen::VectorXd angles(const Eigen::Ref<const Eigen::VectorXd>& parameters) const {
-    check(parameters.size(), "angles");
-    Eigen::VectorXd theta(size());
-    for (Eigen::Index j = 0; j < size(); ++j) theta(j) = angle(j, parameters(j));
-    return theta;
-  }
+  Eigen::VectorXd angles(const Eigen::Ref<const Eigen::VectorXd>& parameters) const;
 
   /// The parameter on the principal branch, Theta in [-pi/2, pi/2]: asin of the normalised angle,
   /// clamped to [-1, 1] so angles at or beyond a limit map to +-pi/2. Fixed joints give 0.
-  Eigen::VectorXd parameters(const Eigen::Ref<const Eigen::VectorXd>& angles) const {
-    check(angles.size(), "parameters");
-    Eigen::VectorXd result(size());
-    for (Eigen::Index j = 0; j < size(); ++j) {
-      const double half = 0.5 * (upper(j) - lower(j));
-      if (half == 0) {
-        result(j) = 0;
-        continue;
-      }
-      const double normalised = (angles(j) - 0.5 * (upper(j) + lower(j))) / half;
-      result(j) = std::asin(std::clamp(normalised, -1.0, 1.0));
-    }
-    return result;
-  }
+  Eigen::VectorXd parameters(const Eigen::Ref<const Eigen::VectorXd>& angles) const;
 
   /// d theta / d Theta = (u - l)/2 cos(Theta) per joint (0 for fixed joints).
-  Eigen::VectorXd derivative(const Eigen::Ref<const Eigen::VectorXd>& parameters) const {
-    check(parameters.size(), "derivative");
-    Eigen::VectorXd result(size());
-    for (Eigen::Index j = 0; j < size(); ++j) {
-      const double half = 0.5 * (upper(j) - lower(j));
-      result(j) = half == 0 ? 0.0 : half * std::cos(parameters(j));
-    }
-    return result;
-  }
+  Eigen::VectorXd derivative(const Eigen::Ref<const Eigen::VectorXd>& parameters) const;
 
   /// Angles within limits? (NaN is not.)
   bool within_limits(const Eigen::Ref<const Eigen::VectorXd>& angles) const {
@@ -107,5 +82,43 @@ struct BoundedJoints {
                            " values for " + std::to_string(size()) + " joints");
   }
 };
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE Eigen::VectorXd BoundedJoints::angles(const Eigen::Ref<const Eigen::VectorXd>& parameters) const {
+  check(parameters.size(), "angles");
+  Eigen::VectorXd theta(size());
+  for (Eigen::Index j = 0; j < size(); ++j) theta(j) = angle(j, parameters(j));
+  return theta;
+}
+
+S2KF_INLINE Eigen::VectorXd BoundedJoints::parameters(const Eigen::Ref<const Eigen::VectorXd>& angles) const {
+  check(angles.size(), "parameters");
+  Eigen::VectorXd result(size());
+  for (Eigen::Index j = 0; j < size(); ++j) {
+    const double half = 0.5 * (upper(j) - lower(j));
+    if (half == 0) {
+      result(j) = 0;
+      continue;
+    }
+    const double normalised = (angles(j) - 0.5 * (upper(j) + lower(j))) / half;
+    result(j) = std::asin(std::clamp(normalised, -1.0, 1.0));
+  }
+  return result;
+}
+
+S2KF_INLINE Eigen::VectorXd BoundedJoints::derivative(
+    const Eigen::Ref<const Eigen::VectorXd>& parameters) const {
+  check(parameters.size(), "derivative");
+  Eigen::VectorXd result(size());
+  for (Eigen::Index j = 0; j < size(); ++j) {
+    const double half = 0.5 * (upper(j) - lower(j));
+    result(j) = half == 0 ? 0.0 : half * std::cos(parameters(j));
+  }
+  return result;
+}
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::body

@@ -7,6 +7,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/body/vector_sincos.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
 
 #include <Eigen/Core>
@@ -35,81 +36,31 @@ inline void check_joint_count(const BodyModel& model, Eigen::Index joints, const
 }  // namespace detail
 
 /// Frames of one pose; the root rotation is given as a matrix (any orientation parameterisation).
-inline FrameTransforms joint_frames(const BodyModel& model, const Eigen::Vector3d& root_position,
-                                    const Eigen::Matrix3d& root_rotation,
-                                    const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
-  detail::check_joint_count(model, joint_angles.size(), "joint_frames");
-  FrameTransforms frames;
-  frames.rotations.resize(model.frame_count());
-  frames.origins.resize(model.frame_count());
-  frames.rotations[0] = root_rotation;
-  frames.origins[0] = root_position;
-  for (int j = 0; j < model.joint_count(); ++j) {
-    const Joint& joint = model.joints[j];
-    const int p = joint.parent_frame;
-    frames.origins[j + 1] = frames.origins[p] + frames.rotations[p] * joint.translation;
-    frames.rotations[j + 1] = frames.rotations[p] * axis_rotation(joint.axis, joint_angles(j));
-  }
-  return frames;
-}
+FrameTransforms joint_frames(const BodyModel& model, const Eigen::Vector3d& root_position,
+                             const Eigen::Matrix3d& root_rotation,
+                             const Eigen::Ref<const Eigen::VectorXd>& joint_angles);
 
-inline FrameTransforms joint_frames(const BodyModel& model, const Pose& pose) {
-  return joint_frames(model, pose.root_position, pose.root_rotation(), pose.joints);
-}
+FrameTransforms joint_frames(const BodyModel& model, const Pose& pose);
 
 /// Marker positions (mm, lab frame), one column per model marker, from already computed frames.
-inline Eigen::Matrix3Xd marker_positions(const BodyModel& model, const FrameTransforms& frames) {
-  Eigen::Matrix3Xd positions(3, model.marker_count());
-  for (int m = 0; m < model.marker_count(); ++m) {
-    const Marker& marker = model.markers[m];
-    positions.col(m) = frames.origins[marker.frame] + frames.rotations[marker.frame] * marker.offset;
-  }
-  return positions;
-}
+Eigen::Matrix3Xd marker_positions(const BodyModel& model, const FrameTransforms& frames);
 
-inline Eigen::Matrix3Xd marker_positions(const BodyModel& model, const Eigen::Vector3d& root_position,
-                                         const Eigen::Matrix3d& root_rotation,
-                                         const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
-  return marker_positions(model, joint_frames(model, root_position, root_rotation, joint_angles));
-}
+Eigen::Matrix3Xd marker_positions(const BodyModel& model, const Eigen::Vector3d& root_position,
+                                  const Eigen::Matrix3d& root_rotation,
+                                  const Eigen::Ref<const Eigen::VectorXd>& joint_angles);
 
 /// Marker positions (3 x marker_count, mm, lab frame) of one pose.
-inline Eigen::Matrix3Xd marker_positions(const BodyModel& model, const Pose& pose) {
-  return marker_positions(model, joint_frames(model, pose));
-}
+Eigen::Matrix3Xd marker_positions(const BodyModel& model, const Pose& pose);
 
 /// Jacobian (3 M x (6 + J)) of the stacked marker positions [x0, y0, z0, x1, ...] with respect to
 /// [root position (3), root roll, pitch, yaw (3), joint angles (J)]. A joint moves the markers
 /// downstream of it by w x (p - o), w its world axis and o its centre; roll, pitch and yaw rotate
 /// about Rz Ry e_x, Rz e_y and e_z through the root.
-inline Eigen::MatrixXd marker_jacobian(const BodyModel& model, const Eigen::Vector3d& root_position,
-                                       const Eigen::Vector3d& root_rpy,
-                                       const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
-  const FrameTransforms frames =
-      joint_frames(model, root_position, rotation_from_rpy(root_rpy), joint_angles);
-  const Eigen::Matrix3Xd positions = marker_positions(model, frames);
-  const Eigen::Matrix3d yaw = axis_rotation(Axis::z, root_rpy(2));
-  const Eigen::Matrix3d yaw_pitch = yaw * axis_rotation(Axis::y, root_rpy(1));
-  const Eigen::Vector3d root_axes[3] = {yaw_pitch.col(0), yaw.col(1), Eigen::Vector3d::UnitZ()};
-  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(3 * model.marker_count(), 6 + model.joint_count());
-  for (int m = 0; m < model.marker_count(); ++m) {
-    const Eigen::Vector3d p = positions.col(m);
-    // Fixed-size blocks: GCC 12 with AVX-512 misreads 3-vectors copied into dynamic blocks (-Warray-bounds).
-    jacobian.block<3, 3>(3 * m, 0).setIdentity();
-    const Eigen::Vector3d from_root = p - root_position;
-    for (int k = 0; k < 3; ++k) jacobian.block<3, 1>(3 * m, 3 + k) = root_axes[k].cross(from_root);
-    for (int f = model.markers[m].frame; f > 0; f = model.joints[f - 1].parent_frame) {
-      const Joint& joint = model.joints[f - 1];
-      const Eigen::Vector3d axis = frames.rotations[f].col(static_cast<int>(joint.axis));
-      jacobian.block<3, 1>(3 * m, 6 + f - 1) = axis.cross(p - frames.origins[f]);
-    }
-  }
-  return jacobian;
-}
+Eigen::MatrixXd marker_jacobian(const BodyModel& model, const Eigen::Vector3d& root_position,
+                                const Eigen::Vector3d& root_rpy,
+                                const Eigen::Ref<const Eigen::VectorXd>& joint_angles);
 
-inline Eigen::MatrixXd marker_jacobian(const BodyModel& model, const Pose& pose) {
-  return marker_jacobian(model, pose.root_position, pose.root_rpy, pose.joints);
-}
+Eigen::MatrixXd marker_jacobian(const BodyModel& model, const Pose& pose);
 
 /// Scratch memory of batched forward kinematics (the Pinocchio "Data" to the model's "Model").
 /// Poses are processed in blocks of at most kBlock (block_size() splits a batch evenly); every
@@ -250,11 +201,89 @@ void copy_markers_out(const BasicForwardKinematicsWorkspace<Scalar>& ws, Eigen::
 /// rotation matrix entries row-major: row 3 r + c holds R(r, c)), joint_angles (J x L, rad) ->
 /// markers (3 M x L, rows x0, y0, z0, x1, ...; sized by the caller). Does not allocate once `ws`
 /// has seen this model. Equal to marker_positions() per pose up to rounding.
-inline void marker_positions_batch(const BodyModel& model,
-                                   const Eigen::Ref<const Eigen::MatrixXd>& root_positions,
-                                   const Eigen::Ref<const Eigen::MatrixXd>& root_rotations,
-                                   const Eigen::Ref<const Eigen::MatrixXd>& joint_angles,
-                                   ForwardKinematicsWorkspace& ws, Eigen::Ref<Eigen::MatrixXd> markers) {
+void marker_positions_batch(const BodyModel& model, const Eigen::Ref<const Eigen::MatrixXd>& root_positions,
+                            const Eigen::Ref<const Eigen::MatrixXd>& root_rotations,
+                            const Eigen::Ref<const Eigen::MatrixXd>& joint_angles,
+                            ForwardKinematicsWorkspace& ws, Eigen::Ref<Eigen::MatrixXd> markers);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE FrameTransforms joint_frames(const BodyModel& model, const Eigen::Vector3d& root_position,
+                                         const Eigen::Matrix3d& root_rotation,
+                                         const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
+  detail::check_joint_count(model, joint_angles.size(), "joint_frames");
+  FrameTransforms frames;
+  frames.rotations.resize(model.frame_count());
+  frames.origins.resize(model.frame_count());
+  frames.rotations[0] = root_rotation;
+  frames.origins[0] = root_position;
+  for (int j = 0; j < model.joint_count(); ++j) {
+    const Joint& joint = model.joints[j];
+    const int p = joint.parent_frame;
+    frames.origins[j + 1] = frames.origins[p] + frames.rotations[p] * joint.translation;
+    frames.rotations[j + 1] = frames.rotations[p] * axis_rotation(joint.axis, joint_angles(j));
+  }
+  return frames;
+}
+
+S2KF_INLINE FrameTransforms joint_frames(const BodyModel& model, const Pose& pose) {
+  return joint_frames(model, pose.root_position, pose.root_rotation(), pose.joints);
+}
+
+S2KF_INLINE Eigen::Matrix3Xd marker_positions(const BodyModel& model, const FrameTransforms& frames) {
+  Eigen::Matrix3Xd positions(3, model.marker_count());
+  for (int m = 0; m < model.marker_count(); ++m) {
+    const Marker& marker = model.markers[m];
+    positions.col(m) = frames.origins[marker.frame] + frames.rotations[marker.frame] * marker.offset;
+  }
+  return positions;
+}
+
+S2KF_INLINE Eigen::Matrix3Xd marker_positions(const BodyModel& model, const Eigen::Vector3d& root_position,
+                                              const Eigen::Matrix3d& root_rotation,
+                                              const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
+  return marker_positions(model, joint_frames(model, root_position, root_rotation, joint_angles));
+}
+
+S2KF_INLINE Eigen::Matrix3Xd marker_positions(const BodyModel& model, const Pose& pose) {
+  return marker_positions(model, joint_frames(model, pose));
+}
+
+S2KF_INLINE Eigen::MatrixXd marker_jacobian(const BodyModel& model, const Eigen::Vector3d& root_position,
+                                            const Eigen::Vector3d& root_rpy,
+                                            const Eigen::Ref<const Eigen::VectorXd>& joint_angles) {
+  const FrameTransforms frames =
+      joint_frames(model, root_position, rotation_from_rpy(root_rpy), joint_angles);
+  const Eigen::Matrix3Xd positions = marker_positions(model, frames);
+  const Eigen::Matrix3d yaw = axis_rotation(Axis::z, root_rpy(2));
+  const Eigen::Matrix3d yaw_pitch = yaw * axis_rotation(Axis::y, root_rpy(1));
+  const Eigen::Vector3d root_axes[3] = {yaw_pitch.col(0), yaw.col(1), Eigen::Vector3d::UnitZ()};
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(3 * model.marker_count(), 6 + model.joint_count());
+  for (int m = 0; m < model.marker_count(); ++m) {
+    const Eigen::Vector3d p = positions.col(m);
+    // Fixed-size blocks: GCC 12 with AVX-512 misreads 3-vectors copied into dynamic blocks (-Warray-bounds).
+    jacobian.block<3, 3>(3 * m, 0).setIdentity();
+    const Eigen::Vector3d from_root = p - root_position;
+    for (int k = 0; k < 3; ++k) jacobian.block<3, 1>(3 * m, 3 + k) = root_axes[k].cross(from_root);
+    for (int f = model.markers[m].frame; f > 0; f = model.joints[f - 1].parent_frame) {
+      const Joint& joint = model.joints[f - 1];
+      const Eigen::Vector3d axis = frames.rotations[f].col(static_cast<int>(joint.axis));
+      jacobian.block<3, 1>(3 * m, 6 + f - 1) = axis.cross(p - frames.origins[f]);
+    }
+  }
+  return jacobian;
+}
+
+S2KF_INLINE Eigen::MatrixXd marker_jacobian(const BodyModel& model, const Pose& pose) {
+  return marker_jacobian(model, pose.root_position, pose.root_rpy, pose.joints);
+}
+
+S2KF_INLINE void marker_positions_batch(const BodyModel& model,
+                                        const Eigen::Ref<const Eigen::MatrixXd>& root_positions,
+                                        const Eigen::Ref<const Eigen::MatrixXd>& root_rotations,
+                                        const Eigen::Ref<const Eigen::MatrixXd>& joint_angles,
+                                        ForwardKinematicsWorkspace& ws, Eigen::Ref<Eigen::MatrixXd> markers) {
   const Eigen::Index count = root_positions.cols();
   if (root_positions.rows() != 3 || root_rotations.rows() != 9 || root_rotations.cols() != count ||
       joint_angles.rows() != model.joint_count() || joint_angles.cols() != count ||
@@ -282,5 +311,7 @@ inline void marker_positions_batch(const BodyModel& model,
     copy_markers_out(ws, n, markers.middleCols(start, n));
   }
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::body

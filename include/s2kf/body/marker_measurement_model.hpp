@@ -9,6 +9,7 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/body/vector_sincos.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
 
 #include <Eigen/Core>
@@ -82,41 +83,14 @@ class MarkerMeasurementModel {
   }
 
   /// The pose a state stands for (joint angles through the bounded map).
-  Pose pose(const Eigen::Ref<const Eigen::VectorXd>& state) const {
-    check_state_size(state.size(), "pose");
-    const Eigen::Vector3d rpy = orientation_ == OrientationParameterization::roll_pitch_yaw
-                                    ? Eigen::Vector3d(state.segment<3>(3))
-                                    : rpy_from_rotation(root_rotation(state.segment<3>(3)));
-    return Pose{state.head<3>(), rpy, joints_.angles(state.tail(model_.joint_count()))};
-  }
+  Pose pose(const Eigen::Ref<const Eigen::VectorXd>& state) const;
 
   /// A state that stands for `pose` (Theta on the principal branch; delta = Log(R_ref^T R)).
-  Eigen::VectorXd state(const Pose& pose) const {
-    detail::check_joint_count(model_, pose.joints.size(), "MarkerMeasurementModel::state");
-    Eigen::VectorXd x(state_dimension());
-    x.head<3>() = pose.root_position;
-    x.segment<3>(3) = orientation_ == OrientationParameterization::roll_pitch_yaw
-                          ? pose.root_rpy
-                          : rotation_log(reference_.transpose() * pose.root_rotation());
-    x.tail(model_.joint_count()) = joints_.parameters(pose.joints);
-    return x;
-  }
+  Eigen::VectorXd state(const Pose& pose) const;
 
   /// predictions.col(i) = h(states.col(i)); predictions must be measurement_dimension() x L. Takes
   /// Refs so column blocks work too; the filter's (const MatrixXd&, MatrixXd&) binds without copies.
-  void operator()(const Eigen::Ref<const Eigen::MatrixXd>& states, Eigen::Ref<Eigen::MatrixXd> predictions) {
-    const Eigen::Index count = states.cols();
-    check_state_size(states.rows(), "operator()");
-    if (predictions.rows() != measurement_dimension() || predictions.cols() != count)
-      throw DimensionError("MarkerMeasurementModel: predictions must be " +
-                           std::to_string(measurement_dimension()) + " x " + std::to_string(count) +
-                           ", got " + std::to_string(predictions.rows()) + " x " +
-                           std::to_string(predictions.cols()));
-    if (single_precision_)
-      evaluate(states, predictions, ws_single_, orientation_single_);
-    else
-      evaluate(states, predictions, ws_, orientation_buffer_);
-  }
+  void operator()(const Eigen::Ref<const Eigen::MatrixXd>& states, Eigen::Ref<Eigen::MatrixXd> predictions);
 
   /// Forward kinematics of the samples in single precision (float staging, sine and cosine, joint
   /// chain and markers; the predictions are still returned as doubles): about twice as fast with
@@ -251,14 +225,21 @@ class MarkerMeasurementModel {
 };
 
 /// Diagonal measurement noise R (3 M x 3 M) with the same variance (mm^2) for every coordinate.
-inline Eigen::MatrixXd marker_noise(double variance_mm2, Eigen::Index marker_count) {
+Eigen::MatrixXd marker_noise(double variance_mm2, Eigen::Index marker_count);
+
+/// Diagonal measurement noise R (3 M x 3 M) with one variance (mm^2) per marker, for all 3 coordinates.
+Eigen::MatrixXd marker_noise(const Eigen::Ref<const Eigen::VectorXd>& variance_mm2_per_marker);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE Eigen::MatrixXd marker_noise(double variance_mm2, Eigen::Index marker_count) {
   if (!(variance_mm2 >= 0) || !std::isfinite(variance_mm2) || marker_count < 0)
     throw std::invalid_argument("marker_noise: the variance must be a finite number >= 0 (mm^2)");
   return Eigen::VectorXd::Constant(3 * marker_count, variance_mm2).asDiagonal();
 }
 
-/// Diagonal measurement noise R (3 M x 3 M) with one variance (mm^2) per marker, for all 3 coordinates.
-inline Eigen::MatrixXd marker_noise(const Eigen::Ref<const Eigen::VectorXd>& variance_mm2_per_marker) {
+S2KF_INLINE Eigen::MatrixXd marker_noise(const Eigen::Ref<const Eigen::VectorXd>& variance_mm2_per_marker) {
   if (!variance_mm2_per_marker.allFinite() || (variance_mm2_per_marker.array() < 0).any())
     throw std::invalid_argument("marker_noise: every variance must be a finite number >= 0 (mm^2)");
   Eigen::VectorXd diagonal(3 * variance_mm2_per_marker.size());
@@ -266,5 +247,40 @@ inline Eigen::MatrixXd marker_noise(const Eigen::Ref<const Eigen::VectorXd>& var
     diagonal.segment<3>(3 * m).setConstant(variance_mm2_per_marker(m));
   return diagonal.asDiagonal();
 }
+
+S2KF_INLINE Pose MarkerMeasurementModel::pose(const Eigen::Ref<const Eigen::VectorXd>& state) const {
+  check_state_size(state.size(), "pose");
+  const Eigen::Vector3d rpy = orientation_ == OrientationParameterization::roll_pitch_yaw
+                                  ? Eigen::Vector3d(state.segment<3>(3))
+                                  : rpy_from_rotation(root_rotation(state.segment<3>(3)));
+  return Pose{state.head<3>(), rpy, joints_.angles(state.tail(model_.joint_count()))};
+}
+
+S2KF_INLINE Eigen::VectorXd MarkerMeasurementModel::state(const Pose& pose) const {
+  detail::check_joint_count(model_, pose.joints.size(), "MarkerMeasurementModel::state");
+  Eigen::VectorXd x(state_dimension());
+  x.head<3>() = pose.root_position;
+  x.segment<3>(3) = orientation_ == OrientationParameterization::roll_pitch_yaw
+                        ? pose.root_rpy
+                        : rotation_log(reference_.transpose() * pose.root_rotation());
+  x.tail(model_.joint_count()) = joints_.parameters(pose.joints);
+  return x;
+}
+
+S2KF_INLINE void MarkerMeasurementModel::operator()(const Eigen::Ref<const Eigen::MatrixXd>& states,
+                                                    Eigen::Ref<Eigen::MatrixXd> predictions) {
+  const Eigen::Index count = states.cols();
+  check_state_size(states.rows(), "operator()");
+  if (predictions.rows() != measurement_dimension() || predictions.cols() != count)
+    throw DimensionError("MarkerMeasurementModel: predictions must be " +
+                         std::to_string(measurement_dimension()) + " x " + std::to_string(count) + ", got " +
+                         std::to_string(predictions.rows()) + " x " + std::to_string(predictions.cols()));
+  if (single_precision_)
+    evaluate(states, predictions, ws_single_, orientation_single_);
+  else
+    evaluate(states, predictions, ws_, orientation_buffer_);
+}
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::body

@@ -7,6 +7,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/core/label_text.hpp>
 
@@ -105,7 +106,23 @@ inline std::string marker_set_frame_name(const BodyModel& model, int frame) {
 /// Throws std::invalid_argument for a set that cannot be applied to `base`: no entries, an empty
 /// label, a label (or alias) used twice (case-insensitive), an unknown frame, segment or `like`
 /// marker, a non-finite offset, a noise that is not positive, a negative weight.
-inline void validate_marker_set(const BodyModel& base, const MarkerSet& set) {
+void validate_marker_set(const BodyModel& base, const MarkerSet& set);
+
+/// The base model with its markers replaced by the set's, in the set's order. The set's offsets
+/// are scaled by base.height_mm / reference_height_mm; `like` positions are read from the base
+/// model's own markers (so `base` must carry them, e.g. mmm_body_model(height)). Segment scales
+/// multiply the translations of the joints leaving each segment; joint limits replace the model's.
+BodyModel apply_marker_set(const BodyModel& base, const MarkerSet& set);
+
+/// What a user should know before tracking with `model` (a base model after apply_marker_set):
+/// segments the base model observed that the set leaves with no marker, and segments with a single
+/// marker, whose rotation about the line from the joint to that marker no marker constrains.
+std::vector<std::string> marker_set_warnings(const BodyModel& base, const BodyModel& model);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE void validate_marker_set(const BodyModel& base, const MarkerSet& set) {
   const std::string where = "marker set" + (set.name.empty() ? std::string() : " '" + set.name + "'");
   if (set.entries.empty()) throw std::invalid_argument(where + " has no markers");
   if (!(set.reference_height_mm > 0) || !std::isfinite(set.reference_height_mm))
@@ -159,11 +176,7 @@ inline void validate_marker_set(const BodyModel& base, const MarkerSet& set) {
   }
 }
 
-/// The base model with its markers replaced by the set's, in the set's order. The set's offsets
-/// are scaled by base.height_mm / reference_height_mm; `like` positions are read from the base
-/// model's own markers (so `base` must carry them, e.g. mmm_body_model(height)). Segment scales
-/// multiply the translations of the joints leaving each segment; joint limits replace the model's.
-inline BodyModel apply_marker_set(const BodyModel& base, const MarkerSet& set) {
+S2KF_INLINE BodyModel apply_marker_set(const BodyModel& base, const MarkerSet& set) {
   base.validate();
   validate_marker_set(base, set);
   const double factor = base.height_mm / set.reference_height_mm;
@@ -201,10 +214,7 @@ inline BodyModel apply_marker_set(const BodyModel& base, const MarkerSet& set) {
   return model;
 }
 
-/// What a user should know before tracking with `model` (a base model after apply_marker_set):
-/// segments the base model observed that the set leaves with no marker, and segments with a single
-/// marker, whose rotation about the line from the joint to that marker no marker constrains.
-inline std::vector<std::string> marker_set_warnings(const BodyModel& base, const BodyModel& model) {
+S2KF_INLINE std::vector<std::string> marker_set_warnings(const BodyModel& base, const BodyModel& model) {
   std::map<std::string, int> base_count, count;
   for (const Marker& marker : base.markers) ++base_count[segment_of_frame(base, marker.frame)];
   for (const Marker& marker : model.markers) ++count[segment_of_frame(model, marker.frame)];
@@ -225,5 +235,7 @@ inline std::vector<std::string> marker_set_warnings(const BodyModel& base, const
   }
   return warnings;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::body

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/label_text.hpp>
 
 #include <algorithm>
@@ -79,7 +80,17 @@ std::map<std::string, int> entry_keys(const MarkerSet& set, KeyOf key_of) {
 /// rule that finds a free entry for it, and within a rule the first label takes an entry (a second
 /// label for the same marker stays unassigned). A subject prefix without a separator is removed
 /// only where the rest then matches an entry, and only when at least two labels agree on it.
-inline LabelAssignment assign_labels(const std::vector<std::string>& recording_labels, const MarkerSet& set) {
+LabelAssignment assign_labels(const std::vector<std::string>& recording_labels, const MarkerSet& set);
+
+/// How well a recording's labels fit a set: the fraction of the set's markers that assign_labels
+/// finds among the labels.
+double marker_set_match(const std::vector<std::string>& recording_labels, const MarkerSet& set);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE LabelAssignment assign_labels(const std::vector<std::string>& recording_labels,
+                                          const MarkerSet& set) {
   LabelAssignment result;
   const std::size_t n = recording_labels.size();
   result.entry_of_label.assign(n, -1);
@@ -134,12 +145,12 @@ inline LabelAssignment assign_labels(const std::vector<std::string>& recording_l
   return result;
 }
 
-/// How well a recording's labels fit a set: the fraction of the set's markers that assign_labels
-/// finds among the labels.
-inline double marker_set_match(const std::vector<std::string>& recording_labels, const MarkerSet& set) {
+S2KF_INLINE double marker_set_match(const std::vector<std::string>& recording_labels, const MarkerSet& set) {
   if (set.entries.empty()) return 0.0;
   return static_cast<double>(assign_labels(recording_labels, set).entries_found()) /
          static_cast<double>(set.entries.size());
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::body

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -56,17 +57,10 @@ inline Eigen::Vector3d rpy_from_rotation(const Eigen::Matrix3d& r) {
 }
 
 /// Exp of a rotation vector (axis times angle, rad): the rotation by |v| about v / |v|.
-inline Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& v) {
-  const double angle = v.norm();
-  if (angle == 0) return Eigen::Matrix3d::Identity();
-  return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
-}
+Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& v);
 
 /// Log of a rotation matrix: the rotation vector with angle in [0, pi].
-inline Eigen::Vector3d rotation_log(const Eigen::Matrix3d& r) {
-  const Eigen::AngleAxisd angle_axis(r);
-  return angle_axis.angle() * angle_axis.axis();
-}
+Eigen::Vector3d rotation_log(const Eigen::Matrix3d& r);
 
 /// A whole-body pose: the root (pelvis) frame in the lab and the joint angles in state order. The
 /// joint vector is sized by the model it belongs to (40 zeros by default, the MMM model's count);
@@ -85,7 +79,7 @@ inline Pose zero_pose(const BodyModel& model) {
 }
 
 /// Number of values of a pose row before the joints: root position (3) and roll, pitch, yaw (3).
-inline constexpr int kRootValues = 6;
+constexpr int kRootValues = 6;
 
 /// A pose as one row of a motion table: root_x, root_y, root_z (mm), roll, pitch, yaw (rad), joints.
 template <typename Row>
@@ -114,5 +108,21 @@ inline std::vector<std::string> pose_column_names(const std::vector<std::string>
   names.insert(names.end(), joint_names.begin(), joint_names.end());
   return names;
 }
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& v) {
+  const double angle = v.norm();
+  if (angle == 0) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
+}
+
+S2KF_INLINE Eigen::Vector3d rotation_log(const Eigen::Matrix3d& r) {
+  const Eigen::AngleAxisd angle_axis(r);
+  return angle_axis.angle() * angle_axis.axis();
+}
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::body

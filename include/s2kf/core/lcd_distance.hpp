@@ -4,6 +4,7 @@
 /// half-sample form {+s_k, -s_k} (+ origin) that the S2KF optimises.
 #pragma once
 
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/exponential_integral.hpp>
@@ -42,65 +43,14 @@ namespace detail {
 
 /// Gauss-Legendre nodes and weights on [-1, 1], by Newton's method on P_n from the Chebyshev-like
 /// initial guesses (exact to rounding for the small n used here).
-inline void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
-  nodes.assign(static_cast<std::size_t>(n), 0.0);
-  weights.assign(static_cast<std::size_t>(n), 0.0);
-  const double pi = kPi;
-  for (int i = 0; i < (n + 1) / 2; ++i) {
-    double x = std::cos(pi * (i + 0.75) / (n + 0.5));
-    double derivative = 0.0;
-    for (int iteration = 0; iteration < 100; ++iteration) {
-      double p0 = 1.0, p1 = 0.0;
-      for (int j = 1; j <= n; ++j) {
-        const double p2 = p1;
-        p1 = p0;
-        p0 = ((2.0 * j - 1.0) * x * p1 - (j - 1.0) * p2) / j;
-      }
-      derivative = n * (x * p0 - p1) / (x * x - 1.0);
-      const double step = p0 / derivative;
-      x -= step;
-      if (std::abs(step) <= 1e-16) break;
-    }
-    // One more derivative at the converged node for the weight.
-    double p0 = 1.0, p1 = 0.0;
-    for (int j = 1; j <= n; ++j) {
-      const double p2 = p1;
-      p1 = p0;
-      p0 = ((2.0 * j - 1.0) * x * p1 - (j - 1.0) * p2) / j;
-    }
-    derivative = n * (x * p0 - p1) / (x * x - 1.0);
-    const double weight = 2.0 / ((1.0 - x * x) * derivative * derivative);
-    nodes[static_cast<std::size_t>(i)] = -x;
-    nodes[static_cast<std::size_t>(n - 1 - i)] = x;
-    weights[static_cast<std::size_t>(i)] = weights[static_cast<std::size_t>(n - 1 - i)] = weight;
-  }
-}
+void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights);
 
 /// A composite Gauss-Legendre rule on [0, bmax]: subintervals [0, 1/2], [1/2, 1], [1, 2], ... that
 /// double in length up to bmax, with `per_interval` nodes each. The integrands of the LCD distance
 /// are analytic with their nearest singularities at b = +-i/sqrt(2) (from 1 + 2 b^2 = 0) or +-i (from
 /// 1 + b^2), so each doubling interval sees them at a fixed relative distance and the rule converges
 /// geometrically on every interval alike, however large bmax is.
-inline void lcd_b_rule(double bmax, int per_interval, std::vector<double>& nodes,
-                       std::vector<double>& weights) {
-  std::vector<double> x, w;
-  gauss_legendre(per_interval, x, w);
-  nodes.clear();
-  weights.clear();
-  double left = 0.0;
-  double right = std::min(0.5, bmax);
-  while (left < bmax) {
-    const double half = 0.5 * (right - left), mid = 0.5 * (right + left);
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      nodes.push_back(mid + half * x[i]);
-      weights.push_back(half * w[i]);
-    }
-    left = right;
-    right = std::min(2.0 * right, bmax);
-    // Do not leave a sliver: merge a last interval shorter than a quarter of its predecessor.
-    if (right < bmax && bmax - right < 0.25 * (right - left)) right = bmax;
-  }
-}
+void lcd_b_rule(double bmax, int per_interval, std::vector<double>& nodes, std::vector<double>& weights);
 
 /// Power series of phi(x) = exp(-x) - x E1(x) without its x ln x part:
 /// phi(x) = x ln x + sum_m p_m x^m, p_0 = 1, p_1 = gamma - 1, p_m = (-1)^m (1/m! - 1/((m-1)(m-1)!)).
@@ -234,45 +184,7 @@ class LcdObjective {
 
   /// -2 D2 + D3 of the equally weighted set `samples` (N x L, one sample per column), and its
   /// gradient with respect to every sample (N x L) written to `gradient`.
-  double evaluate(const Eigen::Ref<const Eigen::MatrixXd>& samples, Eigen::Ref<Eigen::MatrixXd> gradient) {
-    check_rows(samples.rows(), "evaluate");
-    const Eigen::Index count = samples.cols();
-    if (count < 1) throw DimensionError("LcdObjective::evaluate: the sample set is empty");
-    if (gradient.rows() != samples.rows() || gradient.cols() != count)
-      throw DimensionError("LcdObjective::evaluate: the gradient must have the shape of the samples");
-    const double w = 1.0 / static_cast<double>(count);
-    gram_.resize(count, count);
-    gram_.noalias() = samples.transpose() * samples;
-    radius_ = gram_.diagonal();
-    coefficient_.resize(count);
-    row_sum_.setZero(count);
-    // Pairwise part: D3 = w^2 (L g(0) + 2 sum_{i<j} g(d_ij)); gradient 4 w^2 sum_j g'(d_ij)(x_i - x_j).
-    double pair_sum = 0.0;
-    for (Eigen::Index j = 0; j < count; ++j) {
-      gram_(j, j) = 0.0;
-      for (Eigen::Index i = 0; i < j; ++i) {
-        const double d = std::max(0.0, radius_(i) + radius_(j) - 2.0 * gram_(i, j));
-        double g, dg;
-        pair_kernel(d, g, dg);
-        pair_sum += g;
-        gram_(i, j) = gram_(j, i) = dg;  // the Gram matrix is no longer needed: reuse it for g'
-        row_sum_(i) += dg;
-        row_sum_(j) += dg;
-      }
-    }
-    double value = w * w * (static_cast<double>(count) * 0.125 * scale_ + 2.0 * pair_sum);
-    double radial_sum = 0.0;
-    for (Eigen::Index i = 0; i < count; ++i) {
-      double h, hq;
-      radial_integrals(radius_(i), h, hq);
-      radial_sum += h;
-      coefficient_(i) = 4.0 * w * hq + 4.0 * w * w * row_sum_(i);
-    }
-    value -= 2.0 * w * radial_sum;
-    gradient.noalias() = samples * coefficient_.asDiagonal();
-    gradient.noalias() -= (4.0 * w * w) * (samples * gram_);
-    return value;
-  }
+  double evaluate(const Eigen::Ref<const Eigen::MatrixXd>& samples, Eigen::Ref<Eigen::MatrixXd> gradient);
 
   /// -2 D2 + D3 of the symmetric set {+s_k, -s_k} (plus the origin when `with_origin`, so
   /// L = 2 L' or 2 L' + 1) from the half samples `half` (N x L'), and its gradient with respect to
@@ -369,10 +281,113 @@ class LcdObjective {
 
 /// The LCD distance D (D1 included) between the equally weighted set `samples` (N x L, one sample
 /// per column) and N(0, I), for the kernel-width limit bmax (see default_bmax).
-inline double lcd_distance(const Eigen::MatrixXd& samples, double bmax) {
+double lcd_distance(const Eigen::MatrixXd& samples, double bmax);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE void detail::gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
+  nodes.assign(static_cast<std::size_t>(n), 0.0);
+  weights.assign(static_cast<std::size_t>(n), 0.0);
+  const double pi = kPi;
+  for (int i = 0; i < (n + 1) / 2; ++i) {
+    double x = std::cos(pi * (i + 0.75) / (n + 0.5));
+    double derivative = 0.0;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      double p0 = 1.0, p1 = 0.0;
+      for (int j = 1; j <= n; ++j) {
+        const double p2 = p1;
+        p1 = p0;
+        p0 = ((2.0 * j - 1.0) * x * p1 - (j - 1.0) * p2) / j;
+      }
+      derivative = n * (x * p0 - p1) / (x * x - 1.0);
+      const double step = p0 / derivative;
+      x -= step;
+      if (std::abs(step) <= 1e-16) break;
+    }
+    // One more derivative at the converged node for the weight.
+    double p0 = 1.0, p1 = 0.0;
+    for (int j = 1; j <= n; ++j) {
+      const double p2 = p1;
+      p1 = p0;
+      p0 = ((2.0 * j - 1.0) * x * p1 - (j - 1.0) * p2) / j;
+    }
+    derivative = n * (x * p0 - p1) / (x * x - 1.0);
+    const double weight = 2.0 / ((1.0 - x * x) * derivative * derivative);
+    nodes[static_cast<std::size_t>(i)] = -x;
+    nodes[static_cast<std::size_t>(n - 1 - i)] = x;
+    weights[static_cast<std::size_t>(i)] = weights[static_cast<std::size_t>(n - 1 - i)] = weight;
+  }
+}
+
+S2KF_INLINE void detail::lcd_b_rule(double bmax, int per_interval, std::vector<double>& nodes,
+                                    std::vector<double>& weights) {
+  std::vector<double> x, w;
+  gauss_legendre(per_interval, x, w);
+  nodes.clear();
+  weights.clear();
+  double left = 0.0;
+  double right = std::min(0.5, bmax);
+  while (left < bmax) {
+    const double half = 0.5 * (right - left), mid = 0.5 * (right + left);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      nodes.push_back(mid + half * x[i]);
+      weights.push_back(half * w[i]);
+    }
+    left = right;
+    right = std::min(2.0 * right, bmax);
+    // Do not leave a sliver: merge a last interval shorter than a quarter of its predecessor.
+    if (right < bmax && bmax - right < 0.25 * (right - left)) right = bmax;
+  }
+}
+
+S2KF_INLINE double lcd_distance(const Eigen::MatrixXd& samples, double bmax) {
   if (samples.rows() < 1 || samples.cols() < 1) throw DimensionError("lcd_distance: the sample set is empty");
   LcdObjective objective(static_cast<int>(samples.rows()), bmax);
   return objective.distance(samples);
 }
+
+S2KF_INLINE double LcdObjective::evaluate(const Eigen::Ref<const Eigen::MatrixXd>& samples,
+                                          Eigen::Ref<Eigen::MatrixXd> gradient) {
+  check_rows(samples.rows(), "evaluate");
+  const Eigen::Index count = samples.cols();
+  if (count < 1) throw DimensionError("LcdObjective::evaluate: the sample set is empty");
+  if (gradient.rows() != samples.rows() || gradient.cols() != count)
+    throw DimensionError("LcdObjective::evaluate: the gradient must have the shape of the samples");
+  const double w = 1.0 / static_cast<double>(count);
+  gram_.resize(count, count);
+  gram_.noalias() = samples.transpose() * samples;
+  radius_ = gram_.diagonal();
+  coefficient_.resize(count);
+  row_sum_.setZero(count);
+  // Pairwise part: D3 = w^2 (L g(0) + 2 sum_{i<j} g(d_ij)); gradient 4 w^2 sum_j g'(d_ij)(x_i - x_j).
+  double pair_sum = 0.0;
+  for (Eigen::Index j = 0; j < count; ++j) {
+    gram_(j, j) = 0.0;
+    for (Eigen::Index i = 0; i < j; ++i) {
+      const double d = std::max(0.0, radius_(i) + radius_(j) - 2.0 * gram_(i, j));
+      double g, dg;
+      pair_kernel(d, g, dg);
+      pair_sum += g;
+      gram_(i, j) = gram_(j, i) = dg;  // the Gram matrix is no longer needed: reuse it for g'
+      row_sum_(i) += dg;
+      row_sum_(j) += dg;
+    }
+  }
+  double value = w * w * (static_cast<double>(count) * 0.125 * scale_ + 2.0 * pair_sum);
+  double radial_sum = 0.0;
+  for (Eigen::Index i = 0; i < count; ++i) {
+    double h, hq;
+    radial_integrals(radius_(i), h, hq);
+    radial_sum += h;
+    coefficient_(i) = 4.0 * w * hq + 4.0 * w * w * row_sum_(i);
+  }
+  value -= 2.0 * w * radial_sum;
+  gradient.noalias() = samples * coefficient_.asDiagonal();
+  gradient.noalias() -= (4.0 * w * w) * (samples * gram_);
+  return value;
+}
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/motion_files.hpp>
@@ -119,39 +120,7 @@ class BvhSkeleton {
 
   /// One frame line: the root's 6 channels, then 3 per joint group (fixed, 6 decimals). `values`
   /// must be finite (BVH has no missing frames: write_bvh repeats a tracked row instead).
-  void write_row(std::ostream& out, const MotionRowRef& values) const {
-    const double degrees = kDegreesPerRadian;
-    const Eigen::Vector3d position = to_bvh(values.head<3>());
-    out << std::fixed << std::setprecision(6);
-    const double root[6] = {position.x(),        position.y(),         position.z(),
-                            values(5) * degrees, -values(4) * degrees, values(3) * degrees};
-    for (int k = 0; k < 6; ++k) {
-      if (k) out << " ";
-      write_fixed(out, root[k], 6);
-    }
-    for (int g : order_) {
-      double channel[3] = {0, 0, 0};  // X, Y, Z
-      for (int j : groups_[g].dofs) {
-        const double q = angle_or_zero(values(6 + j)) * degrees;
-        switch (axes_[j]) {
-          case body::Axis::x:
-            channel[0] = q;
-            break;
-          case body::Axis::z:
-            channel[1] = q;
-            break;
-          case body::Axis::y:
-            channel[2] = -q;
-            break;
-        }
-      }
-      for (const double value : channel) {
-        out << " ";
-        write_fixed(out, value, 6);
-      }
-    }
-    out << "\n";
-  }
+  void write_row(std::ostream& out, const MotionRowRef& values) const;
 
  private:
   struct Group {
@@ -176,8 +145,51 @@ class BvhSkeleton {
 /// tracked) repeat the nearest earlier tracked pose, those before the first tracked frame the first
 /// tracked pose, since BVH has no notion of a missing frame; a motion without any tracked frame is
 /// written as the rest pose.
-inline void write_bvh(std::ostream& out, const body::BodyModel& model, const MotionTable& motion,
-                      double rate_hz, BvhUnits units = BvhUnits::metres) {
+void write_bvh(std::ostream& out, const body::BodyModel& model, const MotionTable& motion, double rate_hz,
+               BvhUnits units = BvhUnits::metres);
+
+void save_bvh(const std::string& path, const body::BodyModel& model, const MotionTable& motion,
+              double rate_hz, BvhUnits units = BvhUnits::metres);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE void BvhSkeleton::write_row(std::ostream& out, const MotionRowRef& values) const {
+  const double degrees = kDegreesPerRadian;
+  const Eigen::Vector3d position = to_bvh(values.head<3>());
+  out << std::fixed << std::setprecision(6);
+  const double root[6] = {position.x(),        position.y(),         position.z(),
+                          values(5) * degrees, -values(4) * degrees, values(3) * degrees};
+  for (int k = 0; k < 6; ++k) {
+    if (k) out << " ";
+    write_fixed(out, root[k], 6);
+  }
+  for (int g : order_) {
+    double channel[3] = {0, 0, 0};  // X, Y, Z
+    for (int j : groups_[g].dofs) {
+      const double q = angle_or_zero(values(6 + j)) * degrees;
+      switch (axes_[j]) {
+        case body::Axis::x:
+          channel[0] = q;
+          break;
+        case body::Axis::z:
+          channel[1] = q;
+          break;
+        case body::Axis::y:
+          channel[2] = -q;
+          break;
+      }
+    }
+    for (const double value : channel) {
+      out << " ";
+      write_fixed(out, value, 6);
+    }
+  }
+  out << "\n";
+}
+
+S2KF_INLINE void write_bvh(std::ostream& out, const body::BodyModel& model, const MotionTable& motion,
+                           double rate_hz, BvhUnits units) {
   motion.check();
   if (static_cast<int>(motion.joint_names.size()) != model.joint_count())
     throw std::invalid_argument("write_bvh: the motion's joints do not match the body model");
@@ -198,9 +210,11 @@ inline void write_bvh(std::ostream& out, const body::BodyModel& model, const Mot
   }
 }
 
-inline void save_bvh(const std::string& path, const body::BodyModel& model, const MotionTable& motion,
-                     double rate_hz, BvhUnits units = BvhUnits::metres) {
+S2KF_INLINE void save_bvh(const std::string& path, const body::BodyModel& model, const MotionTable& motion,
+                          double rate_hz, BvhUnits units) {
   write_file_atomically(path, [&](std::ostream& out) { write_bvh(out, model, motion, rate_hz, units); });
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::io

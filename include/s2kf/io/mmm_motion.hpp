@@ -4,6 +4,7 @@
 /// the KIT Whole-Body Human Motion Database's MMM files.
 #pragma once
 
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/number_text.hpp>
@@ -23,7 +24,32 @@ inline std::string mmm_joint_name(const std::string& joint) { return joint + "_j
 /// Everything before the ModelPose sensor's measurements: the document, the motion, the reference
 /// model "mmm.xml" with the Winter model processor at the subject's height (m), and the sensor's
 /// opening tags.
-inline void write_mmm_header(std::ostream& out, const std::string& motion_name, double height_mm) {
+void write_mmm_header(std::ostream& out, const std::string& motion_name, double height_mm);
+
+/// One ModelPose measurement: root position (mm) and roll, pitch, yaw (rad, R = Rz Ry Rx).
+void write_mmm_model_pose(std::ostream& out, double time_s, const MotionRowRef& values);
+
+/// Closes the ModelPose sensor and opens the Kinematic sensor with its joint list.
+void write_mmm_kinematic_header(std::ostream& out, const std::vector<std::string>& joint_names);
+
+/// One Kinematic measurement: the joint angles (rad) in the configuration's order.
+void write_mmm_joint_position(std::ostream& out, double time_s, const MotionRowRef& values);
+
+inline void write_mmm_footer(std::ostream& out) {
+  out << "        </Data>\n      </Sensor>\n    </Sensors>\n  </Motion>\n</MMM>\n";
+}
+
+/// The whole MMM document of a motion; untracked frames are left out (MMM has no missing values).
+void write_mmm_motion(std::ostream& out, const MotionTable& motion, const std::string& motion_name,
+                      double height_mm);
+
+void save_mmm_motion(const std::string& path, const MotionTable& motion, const std::string& motion_name,
+                     double height_mm);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE void write_mmm_header(std::ostream& out, const std::string& motion_name, double height_mm) {
   std::string escaped;
   for (const char c : motion_name)
     escaped += c == '"'   ? std::string("&quot;")
@@ -44,8 +70,7 @@ inline void write_mmm_header(std::ostream& out, const std::string& motion_name, 
       << "        <Data>\n";
 }
 
-/// One ModelPose measurement: root position (mm) and roll, pitch, yaw (rad, R = Rz Ry Rx).
-inline void write_mmm_model_pose(std::ostream& out, double time_s, const MotionRowRef& values) {
+S2KF_INLINE void write_mmm_model_pose(std::ostream& out, double time_s, const MotionRowRef& values) {
   out << std::setprecision(9) << "          <Measurement timestep=\"";
   write_general(out, time_s, 9);
   out << "\">\n            <RootPosition>";
@@ -57,8 +82,7 @@ inline void write_mmm_model_pose(std::ostream& out, double time_s, const MotionR
   out << "</RootRotation>\n          </Measurement>\n";
 }
 
-/// Closes the ModelPose sensor and opens the Kinematic sensor with its joint list.
-inline void write_mmm_kinematic_header(std::ostream& out, const std::vector<std::string>& joint_names) {
+S2KF_INLINE void write_mmm_kinematic_header(std::ostream& out, const std::vector<std::string>& joint_names) {
   out << "        </Data>\n"
       << "      </Sensor>\n"
       << "      <Sensor type=\"Kinematic\" version=\"1.0\">\n"
@@ -69,8 +93,7 @@ inline void write_mmm_kinematic_header(std::ostream& out, const std::vector<std:
       << "        <Data>\n";
 }
 
-/// One Kinematic measurement: the joint angles (rad) in the configuration's order.
-inline void write_mmm_joint_position(std::ostream& out, double time_s, const MotionRowRef& values) {
+S2KF_INLINE void write_mmm_joint_position(std::ostream& out, double time_s, const MotionRowRef& values) {
   out << std::setprecision(9) << "          <Measurement timestep=\"";
   write_general(out, time_s, 9);
   out << "\">\n            <JointPosition>";
@@ -82,13 +105,8 @@ inline void write_mmm_joint_position(std::ostream& out, double time_s, const Mot
       << "          </Measurement>\n";
 }
 
-inline void write_mmm_footer(std::ostream& out) {
-  out << "        </Data>\n      </Sensor>\n    </Sensors>\n  </Motion>\n</MMM>\n";
-}
-
-/// The whole MMM document of a motion; untracked frames are left out (MMM has no missing values).
-inline void write_mmm_motion(std::ostream& out, const MotionTable& motion, const std::string& motion_name,
-                             double height_mm) {
+S2KF_INLINE void write_mmm_motion(std::ostream& out, const MotionTable& motion,
+                                  const std::string& motion_name, double height_mm) {
   motion.check();
   write_mmm_header(out, motion_name, height_mm);
   for (Eigen::Index r = 0; r < motion.frames(); ++r)
@@ -102,10 +120,12 @@ inline void write_mmm_motion(std::ostream& out, const MotionTable& motion, const
   write_mmm_footer(out);
 }
 
-inline void save_mmm_motion(const std::string& path, const MotionTable& motion,
-                            const std::string& motion_name, double height_mm) {
+S2KF_INLINE void save_mmm_motion(const std::string& path, const MotionTable& motion,
+                                 const std::string& motion_name, double height_mm) {
   write_file_atomically(path,
                         [&](std::ostream& out) { write_mmm_motion(out, motion, motion_name, height_mm); });
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::io

@@ -3,6 +3,7 @@
 /// finite differences of its rows, frame by frame with a three-row window, for inverse dynamics.
 #pragma once
 
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/motion_files.hpp>
 
 #include <Eigen/Core>
@@ -30,19 +31,10 @@ class MotionDerivativeStream {
 
   explicit MotionDerivativeStream(Sink sink) : sink_(std::move(sink)) {}
 
-  void push(long frame, double time, const MotionRowRef& values) {
-    Row next{frame, time, values, is_tracked_row(values)};
-    if (current_) emit(*current_, previous_ ? &*previous_ : nullptr, &next);
-    previous_ = std::move(current_);
-    current_ = std::move(next);
-  }
+  void push(long frame, double time, const MotionRowRef& values);
 
   /// Emits the last row.
-  void finish() {
-    if (current_) emit(*current_, previous_ ? &*previous_ : nullptr, nullptr);
-    previous_.reset();
-    current_.reset();
-  }
+  void finish();
 
  private:
   struct Row {
@@ -60,31 +52,19 @@ class MotionDerivativeStream {
     return d;
   }
 
-  void emit(const Row& row, const Row* before, const Row* after) const {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    Eigen::VectorXd velocity = Eigen::VectorXd::Constant(row.values.size(), nan);
-    Eigen::VectorXd acceleration = velocity;
-    const bool has_before = row.tracked && before && before->tracked && before->time < row.time;
-    const bool has_after = row.tracked && after && after->tracked && after->time > row.time;
-    if (has_before && has_after) {
-      const Eigen::VectorXd slope_before = difference(row.values, before->values) / (row.time - before->time);
-      const Eigen::VectorXd slope_after = difference(after->values, row.values) / (after->time - row.time);
-      velocity = difference(after->values, before->values) / (after->time - before->time);
-      acceleration = 2 * (slope_after - slope_before) / (after->time - before->time);
-    } else if (has_before) {
-      velocity = difference(row.values, before->values) / (row.time - before->time);
-    } else if (has_after) {
-      velocity = difference(after->values, row.values) / (after->time - row.time);
-    }
-    sink_(row.frame, row.time, velocity, acceleration);
-  }
+  void emit(const Row& row, const Row* before, const Row* after) const;
 
   Sink sink_;
   std::optional<Row> previous_, current_;
 };
 
 /// Velocities and accelerations of a whole motion (MotionDerivativeStream's rules).
-inline std::pair<MotionTable, MotionTable> motion_derivatives(const MotionTable& motion) {
+std::pair<MotionTable, MotionTable> motion_derivatives(const MotionTable& motion);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE std::pair<MotionTable, MotionTable> motion_derivatives(const MotionTable& motion) {
   motion.check();
   MotionTable velocity, acceleration;
   for (MotionTable* table : {&velocity, &acceleration}) {
@@ -105,5 +85,39 @@ inline std::pair<MotionTable, MotionTable> motion_derivatives(const MotionTable&
   stream.finish();
   return {velocity, acceleration};
 }
+
+S2KF_INLINE void MotionDerivativeStream::emit(const Row& row, const Row* before, const Row* after) const {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Eigen::VectorXd velocity = Eigen::VectorXd::Constant(row.values.size(), nan);
+  Eigen::VectorXd acceleration = velocity;
+  const bool has_before = row.tracked && before && before->tracked && before->time < row.time;
+  const bool has_after = row.tracked && after && after->tracked && after->time > row.time;
+  if (has_before && has_after) {
+    const Eigen::VectorXd slope_before = difference(row.values, before->values) / (row.time - before->time);
+    const Eigen::VectorXd slope_after = difference(after->values, row.values) / (after->time - row.time);
+    velocity = difference(after->values, before->values) / (after->time - before->time);
+    acceleration = 2 * (slope_after - slope_before) / (after->time - before->time);
+  } else if (has_before) {
+    velocity = difference(row.values, before->values) / (row.time - before->time);
+  } else if (has_after) {
+    velocity = difference(after->values, row.values) / (after->time - row.time);
+  }
+  sink_(row.frame, row.time, velocity, acceleration);
+}
+
+S2KF_INLINE void MotionDerivativeStream::push(long frame, double time, const MotionRowRef& values) {
+  Row next{frame, time, values, is_tracked_row(values)};
+  if (current_) emit(*current_, previous_ ? &*previous_ : nullptr, &next);
+  previous_ = std::move(current_);
+  current_ = std::move(next);
+}
+
+S2KF_INLINE void MotionDerivativeStream::finish() {
+  if (current_) emit(*current_, previous_ ? &*previous_ : nullptr, nullptr);
+  previous_.reset();
+  current_.reset();
+}
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::io

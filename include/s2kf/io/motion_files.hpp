@@ -4,6 +4,7 @@
 #pragma once
 
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/number_text.hpp>
@@ -68,7 +69,41 @@ inline void write_motion_csv_header(std::ostream& out, const std::vector<std::st
 }
 
 /// One CSV line of write_motion_csv: frame, time and the values with %.9g, non-finite ones as "nan".
-inline void write_motion_csv_row(std::ostream& out, long frame, double time, const MotionRowRef& values) {
+void write_motion_csv_row(std::ostream& out, long frame, double time, const MotionRowRef& values);
+
+/// CSV in mm and rad with full precision (%.9g); untracked values are written as "nan".
+void write_motion_csv(std::ostream& out, const MotionTable& motion);
+
+/// The header of write_opensim_mot, up to and including the column names; `rows` is the number of
+/// tracked rows that follow.
+void write_opensim_mot_header(std::ostream& out, const std::string& name,
+                              const std::vector<std::string>& joint_names, std::size_t rows);
+
+/// One line of write_opensim_mot (of a tracked row): time, root translation in metres, angles in
+/// degrees, tab-separated, %.9g.
+void write_opensim_mot_row(std::ostream& out, double time, const MotionRowRef& values);
+
+/// OpenSim motion file: tab-separated, a header ending in "endheader", angles in degrees
+/// (inDegrees=yes), root translation in metres (OpenSim's unit for translational coordinates).
+/// Untracked frames are left out, since OpenSim cannot read NaN.
+void write_opensim_mot(std::ostream& out, const MotionTable& motion, const std::string& name);
+
+void save_motion_csv(const std::string& path, const MotionTable& motion);
+
+void save_opensim_mot(const std::string& path, const MotionTable& motion, const std::string& name);
+
+/// Reads a motion CSV written by write_motion_csv (or the simulator's truth): the header must be
+/// frame,time,root_x,...,root_yaw followed by joint names. Throws std::runtime_error naming the
+/// file, line and problem.
+MotionTable read_motion_csv(std::istream& in, const std::string& name);
+
+MotionTable load_motion_csv(const std::string& path);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE void write_motion_csv_row(std::ostream& out, long frame, double time,
+                                      const MotionRowRef& values) {
   out << std::setprecision(9) << frame << ",";
   write_general(out, time, 9);
   for (Eigen::Index c = 0; c < values.size(); ++c) {
@@ -82,8 +117,7 @@ inline void write_motion_csv_row(std::ostream& out, long frame, double time, con
   out << "\n";
 }
 
-/// CSV in mm and rad with full precision (%.9g); untracked values are written as "nan".
-inline void write_motion_csv(std::ostream& out, const MotionTable& motion) {
+S2KF_INLINE void write_motion_csv(std::ostream& out, const MotionTable& motion) {
   motion.check();
   write_motion_csv_header(out, motion.joint_names);
   for (Eigen::Index r = 0; r < motion.frames(); ++r)
@@ -91,10 +125,8 @@ inline void write_motion_csv(std::ostream& out, const MotionTable& motion) {
                          motion.time[static_cast<std::size_t>(r)], motion.values.row(r).transpose());
 }
 
-/// The header of write_opensim_mot, up to and including the column names; `rows` is the number of
-/// tracked rows that follow.
-inline void write_opensim_mot_header(std::ostream& out, const std::string& name,
-                                     const std::vector<std::string>& joint_names, std::size_t rows) {
+S2KF_INLINE void write_opensim_mot_header(std::ostream& out, const std::string& name,
+                                          const std::vector<std::string>& joint_names, std::size_t rows) {
   const auto columns = motion_columns(joint_names);
   out << name << "\nversion=1\nnRows=" << rows << "\nnColumns=" << columns.size() - 1
       << "\ninDegrees=yes\nendheader\ntime";
@@ -102,9 +134,7 @@ inline void write_opensim_mot_header(std::ostream& out, const std::string& name,
   out << "\n";
 }
 
-/// One line of write_opensim_mot (of a tracked row): time, root translation in metres, angles in
-/// degrees, tab-separated, %.9g.
-inline void write_opensim_mot_row(std::ostream& out, double time, const MotionRowRef& values) {
+S2KF_INLINE void write_opensim_mot_row(std::ostream& out, double time, const MotionRowRef& values) {
   const double degrees = kDegreesPerRadian;
   out << std::setprecision(9);
   write_general(out, time, 9);
@@ -115,10 +145,7 @@ inline void write_opensim_mot_row(std::ostream& out, double time, const MotionRo
   out << "\n";
 }
 
-/// OpenSim motion file: tab-separated, a header ending in "endheader", angles in degrees
-/// (inDegrees=yes), root translation in metres (OpenSim's unit for translational coordinates).
-/// Untracked frames are left out, since OpenSim cannot read NaN.
-inline void write_opensim_mot(std::ostream& out, const MotionTable& motion, const std::string& name) {
+S2KF_INLINE void write_opensim_mot(std::ostream& out, const MotionTable& motion, const std::string& name) {
   motion.check();
   std::size_t rows = 0;
   for (Eigen::Index r = 0; r < motion.frames(); ++r) rows += is_tracked_row(motion.values.row(r).transpose());
@@ -128,18 +155,16 @@ inline void write_opensim_mot(std::ostream& out, const MotionTable& motion, cons
       write_opensim_mot_row(out, motion.time[static_cast<std::size_t>(r)], motion.values.row(r).transpose());
 }
 
-inline void save_motion_csv(const std::string& path, const MotionTable& motion) {
+S2KF_INLINE void save_motion_csv(const std::string& path, const MotionTable& motion) {
   write_file_atomically(path, [&](std::ostream& out) { write_motion_csv(out, motion); });
 }
 
-inline void save_opensim_mot(const std::string& path, const MotionTable& motion, const std::string& name) {
+S2KF_INLINE void save_opensim_mot(const std::string& path, const MotionTable& motion,
+                                  const std::string& name) {
   write_file_atomically(path, [&](std::ostream& out) { write_opensim_mot(out, motion, name); });
 }
 
-/// Reads a motion CSV written by write_motion_csv (or the simulator's truth): the header must be
-/// frame,time,root_x,...,root_yaw followed by joint names. Throws std::runtime_error naming the
-/// file, line and problem.
-inline MotionTable read_motion_csv(std::istream& in, const std::string& name) {
+S2KF_INLINE MotionTable read_motion_csv(std::istream& in, const std::string& name) {
   auto split = [](const std::string& line) {
     std::vector<std::string> cells;
     std::string cell;
@@ -188,10 +213,12 @@ inline MotionTable read_motion_csv(std::istream& in, const std::string& name) {
   return motion;
 }
 
-inline MotionTable load_motion_csv(const std::string& path) {
+S2KF_INLINE MotionTable load_motion_csv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot open the file");
   return read_motion_csv(in, path);
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::io

@@ -6,6 +6,7 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/atomic_file.hpp>
 
 #include <Eigen/Core>
@@ -183,8 +184,17 @@ inline constexpr double kOpenSimPlaceholderInertiaKgM2 = 0.01;
 /// defaults are the zero pose standing on the floor (root_z = the height of the root above the lowest
 /// marker). The MarkerSet holds the markers named in `marker_names` (all of the model's when empty)
 /// at their offsets on their bodies.
-inline void write_opensim_model(std::ostream& out, const body::BodyModel& model, const std::string& name,
-                                const std::vector<std::string>& marker_names = {}) {
+void write_opensim_model(std::ostream& out, const body::BodyModel& model, const std::string& name,
+                         const std::vector<std::string>& marker_names = {});
+
+void save_opensim_model(const std::string& path, const body::BodyModel& model, const std::string& name,
+                        const std::vector<std::string>& marker_names = {});
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE void write_opensim_model(std::ostream& out, const body::BodyModel& model, const std::string& name,
+                                     const std::vector<std::string>& marker_names) {
   model.validate();
   const std::vector<detail::OsimBody> bodies = detail::osim_bodies(model);
   std::vector<int> body_of_frame(model.frame_count(), -1);
@@ -309,10 +319,12 @@ inline void write_opensim_model(std::ostream& out, const body::BodyModel& model,
   out << "      </objects>\n    </MarkerSet>\n  </Model>\n</OpenSimDocument>\n";
 }
 
-inline void save_opensim_model(const std::string& path, const body::BodyModel& model, const std::string& name,
-                               const std::vector<std::string>& marker_names = {}) {
+S2KF_INLINE void save_opensim_model(const std::string& path, const body::BodyModel& model,
+                                    const std::string& name, const std::vector<std::string>& marker_names) {
   write_file_atomically(path,
                         [&](std::ostream& out) { write_opensim_model(out, model, name, marker_names); });
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::io

@@ -3,6 +3,7 @@
 /// Kinematics and Scale tools), in the same ground frame as the .osim of opensim_model.hpp.
 #pragma once
 
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/number_text.hpp>
 #include <s2kf/io/opensim_model.hpp>
 
@@ -21,8 +22,21 @@ namespace s2kf::io {
 /// Units, OrigDataRate, OrigDataStartFrame, OrigNumFrames) and its values (units mm, as recorded), the
 /// marker names each followed by two empty cells, the X1 Y1 Z1 X2 ... line and the blank line that
 /// precedes the data. Tab-separated.
-inline void write_trc_header(std::ostream& out, const std::string& file_name, double rate_hz, long frames,
-                             const std::vector<std::string>& marker_names) {
+void write_trc_header(std::ostream& out, const std::string& file_name, double rate_hz, long frames,
+                      const std::vector<std::string>& marker_names);
+
+/// One data line: the frame number (TRC counts from 1), the time (s) and each marker's position
+/// (`lab_positions_mm`, one column per marker in the header's order, lab frame, mm) turned into
+/// OpenSim's ground frame (opensim_ground_from_lab). A marker not seen in this frame (a non-finite
+/// coordinate) gets three empty cells, which OpenSim reads as missing.
+void write_trc_row(std::ostream& out, long frame_number, double time_s,
+                   const Eigen::Ref<const Eigen::Matrix3Xd>& lab_positions_mm);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE void write_trc_header(std::ostream& out, const std::string& file_name, double rate_hz,
+                                  long frames, const std::vector<std::string>& marker_names) {
   if (!(rate_hz > 0)) throw std::invalid_argument("write_trc_header: the frame rate must be positive");
   out << "PathFileType\t4\t(X/Y/Z)\t" << file_name << "\n"
       << "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames"
@@ -36,12 +50,8 @@ inline void write_trc_header(std::ostream& out, const std::string& file_name, do
   out << "\n\n";
 }
 
-/// One data line: the frame number (TRC counts from 1), the time (s) and each marker's position
-/// (`lab_positions_mm`, one column per marker in the header's order, lab frame, mm) turned into
-/// OpenSim's ground frame (opensim_ground_from_lab). A marker not seen in this frame (a non-finite
-/// coordinate) gets three empty cells, which OpenSim reads as missing.
-inline void write_trc_row(std::ostream& out, long frame_number, double time_s,
-                          const Eigen::Ref<const Eigen::Matrix3Xd>& lab_positions_mm) {
+S2KF_INLINE void write_trc_row(std::ostream& out, long frame_number, double time_s,
+                               const Eigen::Ref<const Eigen::Matrix3Xd>& lab_positions_mm) {
   const Eigen::Matrix3d ground_from_lab = opensim_ground_from_lab();
   out << frame_number << "\t" << std::setprecision(10);
   write_general(out, time_s, 9);
@@ -58,5 +68,7 @@ inline void write_trc_row(std::ostream& out, long frame_number, double time_s,
   }
   out << "\n";
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::io

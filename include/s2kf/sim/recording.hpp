@@ -4,6 +4,7 @@
 #pragma once
 
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/keyframe_motion.hpp>
@@ -48,17 +49,7 @@ struct Recording : MarkerSequence {
 
 /// The true poses of a recording as a motion table (one row per frame, the rows `s2kf track`
 /// writes), for comparing an estimate with compare_with_truth or writing FILE_truth.csv.
-inline io::MotionTable truth_motion(const Recording& recording, const std::vector<std::string>& joint_names) {
-  io::MotionTable table;
-  table.joint_names = joint_names;
-  table.values.resize(recording.frames(), static_cast<Eigen::Index>(body::kRootValues + joint_names.size()));
-  for (Eigen::Index k = 0; k < recording.frames(); ++k) {
-    table.frame.push_back(static_cast<long>(k));
-    table.time.push_back(recording.time_s(k));
-    body::write_pose_row(recording.truth[static_cast<std::size_t>(k)], table.values.row(k).transpose());
-  }
-  return table;
-}
+io::MotionTable truth_motion(const Recording& recording, const std::vector<std::string>& joint_names);
 
 /// Stream numbers of the independent random generators (see derive_seed).
 enum class RandomStream : std::uint64_t { noise = 2, occlusion = 3 };  // the subject: SubjectStream
@@ -71,8 +62,27 @@ inline body::Pose pose_from_sample(const MotionSample& sample, double height_mm)
 
 /// Plays `motion` on `subject` and measures it. `seed` drives the sensor noise and the occlusion
 /// (the subject carries its own draws). Throws std::invalid_argument for bad options, naming them.
-inline Recording simulate_recording(const KeyframeMotion& motion, const Subject& subject,
-                                    const RecordingOptions& options, std::uint64_t seed) {
+Recording simulate_recording(const KeyframeMotion& motion, const Subject& subject,
+                             const RecordingOptions& options, std::uint64_t seed);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE io::MotionTable truth_motion(const Recording& recording,
+                                         const std::vector<std::string>& joint_names) {
+  io::MotionTable table;
+  table.joint_names = joint_names;
+  table.values.resize(recording.frames(), static_cast<Eigen::Index>(body::kRootValues + joint_names.size()));
+  for (Eigen::Index k = 0; k < recording.frames(); ++k) {
+    table.frame.push_back(static_cast<long>(k));
+    table.time.push_back(recording.time_s(k));
+    body::write_pose_row(recording.truth[static_cast<std::size_t>(k)], table.values.row(k).transpose());
+  }
+  return table;
+}
+
+S2KF_INLINE Recording simulate_recording(const KeyframeMotion& motion, const Subject& subject,
+                                         const RecordingOptions& options, std::uint64_t seed) {
   if (!(options.frame_rate > 0.0) || !std::isfinite(options.frame_rate))
     throw std::invalid_argument("the frame rate must be a positive number of Hz");
   if (options.frames < 0) throw std::invalid_argument("the number of frames must not be negative");
@@ -123,5 +133,7 @@ inline Recording simulate_recording(const KeyframeMotion& motion, const Subject&
       if (!recording.visible(m, k)) recording.frame(k).col(m).setConstant(nan);
   return recording;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::sim

@@ -6,6 +6,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/sim/random.hpp>
 #include <s2kf/sim/soft_tissue.hpp>
 
@@ -81,7 +82,40 @@ inline std::string segment_of_frame(const body::BodyModel& model, int frame) {
 /// Every segment is scaled uniformly about its own joint centre: the joint-centre offsets
 /// expressed in a segment's frame (its child joints) and the offsets of the markers riding on it
 /// are multiplied by the segment's factor.
-inline Subject make_subject(const body::BodyModel& base, const SubjectOptions& options, std::uint64_t seed) {
+Subject make_subject(const body::BodyModel& base, const SubjectOptions& options, std::uint64_t seed);
+
+/// The soft-tissue offsets of all markers (3 x markers, mm, each in its own frame) at `pose` and
+/// `time_s`.
+Eigen::Matrix3Xd soft_tissue_offsets(const Subject& subject, const body::Pose& pose, double time_s);
+
+/// The subject's model at one instant: the placed markers moved by the soft tissue. Forward
+/// kinematics of this model at `pose` gives the clean markers of that frame.
+body::BodyModel model_at(const Subject& subject, const body::Pose& pose, double time_s);
+
+/// The clean marker positions (3 x markers, mm, lab frame) of the subject at `pose` and `time_s`.
+Eigen::Matrix3Xd subject_marker_positions(const Subject& subject, const body::Pose& pose, double time_s);
+
+/// The markers riding on a segment ("root" or a joint group such as "LE", "BT"); throws
+/// std::invalid_argument listing the segment names when `segment` is unknown.
+inline std::vector<Eigen::Index> markers_of_segment(const Subject& subject, const std::string& segment) {
+  const auto found = std::find(subject.segments.begin(), subject.segments.end(), segment);
+  if (found == subject.segments.end()) {
+    std::string known;
+    for (const auto& name : subject.segments) known += (known.empty() ? "" : ", ") + name;
+    throw std::invalid_argument("unknown segment '" + segment + "' (segments: " + known + ")");
+  }
+  const int index = static_cast<int>(found - subject.segments.begin());
+  std::vector<Eigen::Index> markers;
+  for (std::size_t m = 0; m < subject.marker_segment.size(); ++m)
+    if (subject.marker_segment[m] == index) markers.push_back(static_cast<Eigen::Index>(m));
+  return markers;
+}
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE Subject make_subject(const body::BodyModel& base, const SubjectOptions& options,
+                                 std::uint64_t seed) {
   validate(options);
   base.validate();
   Subject subject;
@@ -141,9 +175,8 @@ inline Subject make_subject(const body::BodyModel& base, const SubjectOptions& o
   return subject;
 }
 
-/// The soft-tissue offsets of all markers (3 x markers, mm, each in its own frame) at `pose` and
-/// `time_s`.
-inline Eigen::Matrix3Xd soft_tissue_offsets(const Subject& subject, const body::Pose& pose, double time_s) {
+S2KF_INLINE Eigen::Matrix3Xd soft_tissue_offsets(const Subject& subject, const body::Pose& pose,
+                                                 double time_s) {
   Eigen::Matrix3Xd offsets(3, static_cast<Eigen::Index>(subject.soft_tissue.size()));
   const Eigen::VectorXd angles = pose.joints;
   for (std::size_t m = 0; m < subject.soft_tissue.size(); ++m)
@@ -152,9 +185,7 @@ inline Eigen::Matrix3Xd soft_tissue_offsets(const Subject& subject, const body::
   return offsets;
 }
 
-/// The subject's model at one instant: the placed markers moved by the soft tissue. Forward
-/// kinematics of this model at `pose` gives the clean markers of that frame.
-inline body::BodyModel model_at(const Subject& subject, const body::Pose& pose, double time_s) {
+S2KF_INLINE body::BodyModel model_at(const Subject& subject, const body::Pose& pose, double time_s) {
   body::BodyModel model = subject.model;
   const Eigen::Matrix3Xd offsets = soft_tissue_offsets(subject, pose, time_s);
   for (std::size_t m = 0; m < model.markers.size(); ++m)
@@ -162,26 +193,11 @@ inline body::BodyModel model_at(const Subject& subject, const body::Pose& pose, 
   return model;
 }
 
-/// The clean marker positions (3 x markers, mm, lab frame) of the subject at `pose` and `time_s`.
-inline Eigen::Matrix3Xd subject_marker_positions(const Subject& subject, const body::Pose& pose,
-                                                 double time_s) {
+S2KF_INLINE Eigen::Matrix3Xd subject_marker_positions(const Subject& subject, const body::Pose& pose,
+                                                      double time_s) {
   return body::marker_positions(model_at(subject, pose, time_s), pose);
 }
 
-/// The markers riding on a segment ("root" or a joint group such as "LE", "BT"); throws
-/// std::invalid_argument listing the segment names when `segment` is unknown.
-inline std::vector<Eigen::Index> markers_of_segment(const Subject& subject, const std::string& segment) {
-  const auto found = std::find(subject.segments.begin(), subject.segments.end(), segment);
-  if (found == subject.segments.end()) {
-    std::string known;
-    for (const auto& name : subject.segments) known += (known.empty() ? "" : ", ") + name;
-    throw std::invalid_argument("unknown segment '" + segment + "' (segments: " + known + ")");
-  }
-  const int index = static_cast<int>(found - subject.segments.begin());
-  std::vector<Eigen::Index> markers;
-  for (std::size_t m = 0; m < subject.marker_segment.size(); ++m)
-    if (subject.marker_segment[m] == index) markers.push_back(static_cast<Eigen::Index>(m));
-  return markers;
-}
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::sim

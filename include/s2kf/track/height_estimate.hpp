@@ -44,21 +44,9 @@ class HeightEstimator {
   /// Number of rigid marker pairs the recording offers.
   std::size_t pair_count() const { return pairs_.size(); }
 
-  void add_frame(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
-    for (const Pair& pair : pairs_) {
-      const int pa = mapping_.point_of_marker[pair.a], pb = mapping_.point_of_marker[pair.b];
-      if (pa >= points.cols() || pb >= points.cols() || !visible(pa) || !visible(pb)) continue;
-      const double d = (points.col(pa) - points.col(pb)).norm();
-      if (std::isfinite(d) && d > 0) ratios_.push_back(d / pair.model_distance);
-    }
-  }
+  void add_frame(const Eigen::Matrix3Xd& points, const Eigen::Array<bool, Eigen::Dynamic, 1>& visible);
 
-  std::optional<double> height_mm() const {
-    if (ratios_.empty()) return std::nullopt;
-    std::vector<double> sorted = ratios_;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    return height_ * sorted[sorted.size() / 2];
-  }
+  std::optional<double> height_mm() const;
 
  private:
   struct Pair {
@@ -124,5 +112,27 @@ inline std::string units_problem(double geometric_mm, double height_mm, const st
     << "; correct POINT:UNITS in the file";
   return s.str();
 }
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE void HeightEstimator::add_frame(const Eigen::Matrix3Xd& points,
+                                            const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
+  for (const Pair& pair : pairs_) {
+    const int pa = mapping_.point_of_marker[pair.a], pb = mapping_.point_of_marker[pair.b];
+    if (pa >= points.cols() || pb >= points.cols() || !visible(pa) || !visible(pb)) continue;
+    const double d = (points.col(pa) - points.col(pb)).norm();
+    if (std::isfinite(d) && d > 0) ratios_.push_back(d / pair.model_distance);
+  }
+}
+
+S2KF_INLINE std::optional<double> HeightEstimator::height_mm() const {
+  if (ratios_.empty()) return std::nullopt;
+  std::vector<double> sorted = ratios_;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  return height_ * sorted[sorted.size() / 2];
+}
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

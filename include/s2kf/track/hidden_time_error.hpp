@@ -7,6 +7,7 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
@@ -51,11 +52,19 @@ inline std::vector<double> default_hidden_time_edges() { return {0.1, 0.25, 0.5,
 /// segments without a mapped marker are left out. A frame is compared when both motions have it
 /// (finite, tracked) as in compare_with_truth. Throws std::invalid_argument when the motions'
 /// joints are not the model's, the visibility does not fit or the edges do not increase.
-inline HiddenTimeError hidden_time_error(const body::BodyModel& model, const io::MotionTable& estimate,
-                                         const io::MotionTable& truth,
-                                         const Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>& visible,
-                                         const MarkerMapping& mapping, double rate_hz, long warmup,
-                                         const std::vector<double>& edges = default_hidden_time_edges()) {
+HiddenTimeError hidden_time_error(const body::BodyModel& model, const io::MotionTable& estimate,
+                                  const io::MotionTable& truth,
+                                  const Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>& visible,
+                                  const MarkerMapping& mapping, double rate_hz, long warmup,
+                                  const std::vector<double>& edges = default_hidden_time_edges());
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE HiddenTimeError hidden_time_error(
+    const body::BodyModel& model, const io::MotionTable& estimate, const io::MotionTable& truth,
+    const Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>& visible, const MarkerMapping& mapping,
+    double rate_hz, long warmup, const std::vector<double>& edges) {
   if (estimate.joint_names != model.joint_names() || truth.joint_names != model.joint_names())
     throw std::invalid_argument("hidden_time_error: joint columns differ from the body model's");
   if (mapping.point_of_marker.size() != static_cast<std::size_t>(model.marker_count()))
@@ -134,5 +143,7 @@ inline HiddenTimeError hidden_time_error(const body::BodyModel& model, const io:
   result.all = make_bins(all_sum, all_count);
   return result;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

@@ -5,6 +5,7 @@
 
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/marker_set_labels.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 
 #include <string>
@@ -15,8 +16,20 @@ namespace s2kf::track {
 /// Like map_markers, for a model made by apply_marker_set(base, set) (markers in the set's
 /// order): labels are assigned to entries by assign_labels (exact names and aliases, then ignoring
 /// case, spelling and a subject prefix), and what that did beyond exact names is in label_notes.
-inline MarkerMapping map_marker_set(const std::vector<std::string>& recording_labels,
-                                    const body::MarkerSet& set) {
+MarkerMapping map_marker_set(const std::vector<std::string>& recording_labels, const body::MarkerSet& set);
+
+/// Index of the set that fits the labels best: the one that finds the most of the recording's
+/// markers, ties broken by the fraction of the set found (the smaller set that the recording fills:
+/// a lower-body recording takes the lower-body set, not the full one it is half of), then by order.
+/// -1 when no set matches any label.
+int choose_marker_set(const std::vector<std::string>& recording_labels,
+                      const std::vector<body::MarkerSet>& sets);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE MarkerMapping map_marker_set(const std::vector<std::string>& recording_labels,
+                                         const body::MarkerSet& set) {
   const body::LabelAssignment assignment = body::assign_labels(recording_labels, set);
   MarkerMapping mapping;
   mapping.point_of_marker.assign(set.entries.size(), -1);
@@ -31,12 +44,8 @@ inline MarkerMapping map_marker_set(const std::vector<std::string>& recording_la
   return mapping;
 }
 
-/// Index of the set that fits the labels best: the one that finds the most of the recording's
-/// markers, ties broken by the fraction of the set found (the smaller set that the recording fills:
-/// a lower-body recording takes the lower-body set, not the full one it is half of), then by order.
-/// -1 when no set matches any label.
-inline int choose_marker_set(const std::vector<std::string>& recording_labels,
-                             const std::vector<body::MarkerSet>& sets) {
+S2KF_INLINE int choose_marker_set(const std::vector<std::string>& recording_labels,
+                                  const std::vector<body::MarkerSet>& sets) {
   int best = -1;
   double best_score = 0;
   int best_used = 0;
@@ -51,5 +60,7 @@ inline int choose_marker_set(const std::vector<std::string>& recording_labels,
   }
   return best;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

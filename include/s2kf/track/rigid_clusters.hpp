@@ -5,6 +5,7 @@
 /// small against a floor plus a fraction of the distance itself.
 #pragma once
 
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 
 #include <Eigen/Core>
@@ -46,8 +47,14 @@ inline double rigidity_ratio(const RigidClusters& c, int a, int b, const RigidCl
 
 /// Average-linkage agglomeration of the points of `recording` (only those in `points`, e.g. the
 /// labelled ones): two clusters merge while the mean rigidity ratio over their pairs is below 1.
-inline RigidClusters find_rigid_clusters(const MarkerSequence& recording, const std::vector<int>& points,
-                                         const RigidClusterOptions& options = {}) {
+RigidClusters find_rigid_clusters(const MarkerSequence& recording, const std::vector<int>& points,
+                                  const RigidClusterOptions& options = {});
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE RigidClusters find_rigid_clusters(const MarkerSequence& recording, const std::vector<int>& points,
+                                              const RigidClusterOptions& options) {
   const Eigen::Index n = recording.point_count(), frames = recording.frame_count();
   RigidClusters result;
   result.distance_sd.setConstant(n, n, std::numeric_limits<double>::quiet_NaN());
@@ -100,5 +107,7 @@ inline RigidClusters find_rigid_clusters(const MarkerSequence& recording, const 
   result.clusters = std::move(clusters);
   return result;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

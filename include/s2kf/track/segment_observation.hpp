@@ -12,6 +12,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/bounded_joints.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/track/marker_mapping.hpp>
@@ -65,8 +66,32 @@ struct SegmentObservation {
 
 /// The segments of `model` (a set applied to the base model) and what `mapping` lets the recording
 /// observe of them. `point_segment` (optional) receives the segment of every recording point.
-inline SegmentObservation observe_segments(const body::BodyModel& model, const MarkerMapping& mapping,
-                                           std::vector<int>* point_segment = nullptr) {
+SegmentObservation observe_segments(const body::BodyModel& model, const MarkerMapping& mapping,
+                                    std::vector<int>* point_segment = nullptr);
+
+/// Standard deviation of theta = middle + half sin(Theta) for Theta ~ N(mean, variance), exactly:
+/// E[sin] = sin(m) e^(-v/2), E[sin^2] = (1 - cos(2m) e^(-2v)) / 2. Unlike the linearisation
+/// (half |cos m| sqrt(v)) it does not fall to zero at a limit, and it tends to half / sqrt(2) for
+/// a parameter nothing constrains.
+inline double bounded_angle_sd(double half_range, double mean, double variance) {
+  const double e_sin = std::sin(mean) * std::exp(-0.5 * variance);
+  const double e_sin2 = 0.5 * (1.0 - std::cos(2.0 * mean) * std::exp(-2.0 * variance));
+  return half_range * std::sqrt(std::max(0.0, e_sin2 - e_sin * e_sin));
+}
+
+/// Per segment, how uncertain the filter is about it this frame, from the posterior covariance of
+/// the state [root position, orientation error, Theta] at the joint angles `angles` (the tracker keeps
+/// Theta on the principal branch, so Theta follows from the angle): for the root, the
+/// largest standard deviation of its orientation (deg); for a joint group, the largest standard
+/// deviation of its angles (deg, bounded_angle_sd). NaN where the covariance is not given.
+Eigen::VectorXd segment_uncertainty_deg(const body::BodyModel& model, const SegmentObservation& segments,
+                                        const Eigen::VectorXd& angles, const Eigen::MatrixXd& covariance);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE SegmentObservation observe_segments(const body::BodyModel& model, const MarkerMapping& mapping,
+                                                std::vector<int>* point_segment) {
   SegmentObservation result;
   result.segments.push_back("root");
   for (const body::Joint& joint : model.joints)
@@ -104,25 +129,10 @@ inline SegmentObservation observe_segments(const body::BodyModel& model, const M
   return result;
 }
 
-/// Standard deviation of theta = middle + half sin(Theta) for Theta ~ N(mean, variance), exactly:
-/// E[sin] = sin(m) e^(-v/2), E[sin^2] = (1 - cos(2m) e^(-2v)) / 2. Unlike the linearisation
-/// (half |cos m| sqrt(v)) it does not fall to zero at a limit, and it tends to half / sqrt(2) for
-/// a parameter nothing constrains.
-inline double bounded_angle_sd(double half_range, double mean, double variance) {
-  const double e_sin = std::sin(mean) * std::exp(-0.5 * variance);
-  const double e_sin2 = 0.5 * (1.0 - std::cos(2.0 * mean) * std::exp(-2.0 * variance));
-  return half_range * std::sqrt(std::max(0.0, e_sin2 - e_sin * e_sin));
-}
-
-/// Per segment, how uncertain the filter is about it this frame, from the posterior covariance of
-/// the state [root position, orientation error, Theta] at the joint angles `angles` (the tracker keeps
-/// Theta on the principal branch, so Theta follows from the angle): for the root, the
-/// largest standard deviation of its orientation (deg); for a joint group, the largest standard
-/// deviation of its angles (deg, bounded_angle_sd). NaN where the covariance is not given.
-inline Eigen::VectorXd segment_uncertainty_deg(const body::BodyModel& model,
-                                               const SegmentObservation& segments,
-                                               const Eigen::VectorXd& angles,
-                                               const Eigen::MatrixXd& covariance) {
+S2KF_INLINE Eigen::VectorXd segment_uncertainty_deg(const body::BodyModel& model,
+                                                    const SegmentObservation& segments,
+                                                    const Eigen::VectorXd& angles,
+                                                    const Eigen::MatrixXd& covariance) {
   Eigen::VectorXd result = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(segments.segments.size()),
                                                      std::numeric_limits<double>::quiet_NaN());
   const Eigen::Index states = kFirstJointState + model.joint_count();
@@ -143,5 +153,7 @@ inline Eigen::VectorXd segment_uncertainty_deg(const body::BodyModel& model,
   }
   return result;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

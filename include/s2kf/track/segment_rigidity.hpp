@@ -9,6 +9,7 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/track/rigid_clusters.hpp>
 
 #include <algorithm>
@@ -46,17 +47,7 @@ struct MarkerRigidity {
 
 /// The median SD (clusters.distance_sd) of the distances from `point` to the points `others`, NaN
 /// where none was seen with it often enough.
-inline double median_distance_sd(const RigidClusters& clusters, int point, const std::vector<int>& others) {
-  std::vector<double> sd;
-  for (int other : others)
-    if (other != point && std::isfinite(clusters.distance_sd(point, other)))
-      sd.push_back(clusters.distance_sd(point, other));
-  if (sd.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const auto middle = sd.begin() + static_cast<std::ptrdiff_t>(sd.size() / 2);
-  std::nth_element(sd.begin(), middle, sd.end());
-  if (sd.size() % 2 == 1) return *middle;
-  return 0.5 * (*middle + *std::max_element(sd.begin(), middle));
-}
+double median_distance_sd(const RigidClusters& clusters, int point, const std::vector<int>& others);
 
 /// The recording points of each segment, for markers `points[i]` assigned to frames `frame_of[i]`.
 inline std::map<std::string, std::vector<int>> points_by_segment(const body::BodyModel& base,
@@ -84,9 +75,51 @@ inline std::vector<std::string> adjacent_segments(const body::BodyModel& base, c
 /// its segment is compared with the markers of the adjacent segments instead (a hand marker moves
 /// against the forearm's by the wrist's turn only, a thigh marker on the hand by much more), and
 /// its best other segment is sought beyond them.
-inline std::vector<MarkerRigidity> marker_rigidity(const RigidClusters& clusters, const body::BodyModel& base,
-                                                   const std::vector<int>& points,
-                                                   const std::vector<int>& frame_of) {
+std::vector<MarkerRigidity> marker_rigidity(const RigidClusters& clusters, const body::BodyModel& base,
+                                            const std::vector<int>& points, const std::vector<int>& frame_of);
+
+/// One marker moved by repair_segment_assignment.
+struct SegmentMove {
+  std::size_t marker = 0;  ///< index into `points`
+  std::string from, to;    ///< segments
+  double from_sd_mm = 0;   ///< median distance SD to the markers of `from` before the move
+  double to_sd_mm = 0;     ///< ... and to those of `to`
+};
+
+/// Moves markers to the segment they ride on rigidly, the marker that fits its own segment worst
+/// first (of a wrist and a thigh marker put together on the thigh, the wrist marker's distances
+/// vary most), and the rigidity measured again after each move, since a move changes two
+/// segments' members. A marker moves where its distances to its own segment's markers vary by
+/// more than options.misfit_sd_mm, to the segment whose markers keep them below options.move_ratio
+/// of that (one next to its own where one qualifies: a marker at the hip rides on the pelvis, not
+/// on a trunk that did not bend in the recording), onto the frame most of that segment's markers
+/// ride on. Not between two segments that are both steady with it (a marker at a joint the
+/// recording hardly turns): there the difference is soft tissue, and only the template can tell.
+/// Returns the moves in order.
+std::vector<SegmentMove> repair_segment_assignment(const RigidClusters& clusters, const body::BodyModel& base,
+                                                   const std::vector<int>& points, std::vector<int>& frame_of,
+                                                   const SegmentRigidityOptions& options = {});
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE double median_distance_sd(const RigidClusters& clusters, int point,
+                                      const std::vector<int>& others) {
+  std::vector<double> sd;
+  for (int other : others)
+    if (other != point && std::isfinite(clusters.distance_sd(point, other)))
+      sd.push_back(clusters.distance_sd(point, other));
+  if (sd.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto middle = sd.begin() + static_cast<std::ptrdiff_t>(sd.size() / 2);
+  std::nth_element(sd.begin(), middle, sd.end());
+  if (sd.size() % 2 == 1) return *middle;
+  return 0.5 * (*middle + *std::max_element(sd.begin(), middle));
+}
+
+S2KF_INLINE std::vector<MarkerRigidity> marker_rigidity(const RigidClusters& clusters,
+                                                        const body::BodyModel& base,
+                                                        const std::vector<int>& points,
+                                                        const std::vector<int>& frame_of) {
   const auto by_segment = points_by_segment(base, points, frame_of);
   std::vector<MarkerRigidity> result(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -109,29 +142,11 @@ inline std::vector<MarkerRigidity> marker_rigidity(const RigidClusters& clusters
   return result;
 }
 
-/// One marker moved by repair_segment_assignment.
-struct SegmentMove {
-  std::size_t marker = 0;  ///< index into `points`
-  std::string from, to;    ///< segments
-  double from_sd_mm = 0;   ///< median distance SD to the markers of `from` before the move
-  double to_sd_mm = 0;     ///< ... and to those of `to`
-};
-
-/// Moves markers to the segment they ride on rigidly, the marker that fits its own segment worst
-/// first (of a wrist and a thigh marker put together on the thigh, the wrist marker's distances
-/// vary most), and the rigidity measured again after each move, since a move changes two
-/// segments' members. A marker moves where its distances to its own segment's markers vary by
-/// more than options.misfit_sd_mm, to the segment whose markers keep them below options.move_ratio
-/// of that (one next to its own where one qualifies: a marker at the hip rides on the pelvis, not
-/// on a trunk that did not bend in the recording), onto the frame most of that segment's markers
-/// ride on. Not between two segments that are both steady with it (a marker at a joint the
-/// recording hardly turns): there the difference is soft tissue, and only the template can tell.
-/// Returns the moves in order.
-inline std::vector<SegmentMove> repair_segment_assignment(const RigidClusters& clusters,
-                                                          const body::BodyModel& base,
-                                                          const std::vector<int>& points,
-                                                          std::vector<int>& frame_of,
-                                                          const SegmentRigidityOptions& options = {}) {
+S2KF_INLINE std::vector<SegmentMove> repair_segment_assignment(const RigidClusters& clusters,
+                                                               const body::BodyModel& base,
+                                                               const std::vector<int>& points,
+                                                               std::vector<int>& frame_of,
+                                                               const SegmentRigidityOptions& options) {
   std::vector<SegmentMove> moves;
   for (std::size_t step = 0; step < points.size(); ++step) {
     const std::vector<MarkerRigidity> rigidity = marker_rigidity(clusters, base, points, frame_of);
@@ -169,5 +184,7 @@ inline std::vector<SegmentMove> repair_segment_assignment(const RigidClusters& c
   }
   return moves;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

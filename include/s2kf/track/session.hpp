@@ -112,15 +112,7 @@ inline std::vector<double> marker_noise_of(const body::MarkerSet& set) {
 
 /// The calibration's per-marker weights: the set's weight, times (tracker noise / marker noise)^2
 /// where the set gives a marker its own noise.
-inline std::vector<double> calibration_weights(const body::MarkerSet& set, double tracker_noise_mm) {
-  std::vector<double> weights;
-  for (const body::MarkerSetEntry& entry : set.entries) {
-    double w = entry.weight;
-    if (entry.noise_mm) w *= (tracker_noise_mm * tracker_noise_mm) / (*entry.noise_mm * *entry.noise_mm);
-    weights.push_back(w);
-  }
-  return weights;
-}
+std::vector<double> calibration_weights(const body::MarkerSet& set, double tracker_noise_mm);
 
 /// The stretches (first frame, count) of a recording of `frames` frames the calibration reads:
 /// all of it when it has at most `budget` frames, else `windows` stretches of budget / windows
@@ -128,16 +120,8 @@ inline std::vector<double> calibration_weights(const body::MarkerSet& set, doubl
 /// never shorter than kMinimumStretchFrames (the tracker converges at the start of each): a small
 /// budget gives fewer stretches, down to one at the start.
 inline constexpr std::int64_t kMinimumStretchFrames = 100;
-inline std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches(std::int64_t frames,
-                                                                                std::int64_t budget,
-                                                                                int windows) {
-  windows = static_cast<int>(std::min<std::int64_t>(windows, budget / kMinimumStretchFrames));
-  if (frames <= budget || windows <= 1) return {{0, std::min(frames, budget)}};
-  const std::int64_t length = budget / windows;
-  std::vector<std::pair<std::int64_t, std::int64_t>> stretches;
-  for (int w = 0; w < windows; ++w) stretches.emplace_back((frames - length) * w / (windows - 1), length);
-  return stretches;
-}
+std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches(std::int64_t frames,
+                                                                         std::int64_t budget, int windows);
 
 /// Prepares a session: checks the recording, maps its labels to the set's markers, finds the
 /// subject's height, scales the model and, when asked, calibrates the subject on the first
@@ -436,5 +420,31 @@ S2KF_INLINE double calibrated_distance_mm(const Session& session, const Tracking
   return count ? sum / static_cast<double>(count) : std::numeric_limits<double>::quiet_NaN();
 }
 #endif
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE std::vector<double> calibration_weights(const body::MarkerSet& set, double tracker_noise_mm) {
+  std::vector<double> weights;
+  for (const body::MarkerSetEntry& entry : set.entries) {
+    double w = entry.weight;
+    if (entry.noise_mm) w *= (tracker_noise_mm * tracker_noise_mm) / (*entry.noise_mm * *entry.noise_mm);
+    weights.push_back(w);
+  }
+  return weights;
+}
+
+S2KF_INLINE std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches(std::int64_t frames,
+                                                                                     std::int64_t budget,
+                                                                                     int windows) {
+  windows = static_cast<int>(std::min<std::int64_t>(windows, budget / kMinimumStretchFrames));
+  if (frames <= budget || windows <= 1) return {{0, std::min(frames, budget)}};
+  const std::int64_t length = budget / windows;
+  std::vector<std::pair<std::int64_t, std::int64_t>> stretches;
+  for (int w = 0; w < windows; ++w) stretches.emplace_back((frames - length) * w / (windows - 1), length);
+  return stretches;
+}
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 
 #include <Eigen/Core>
@@ -17,18 +18,13 @@
 namespace s2kf::track {
 
 /// Index of the first Theta in the state (after root position and orientation error).
-inline constexpr int kFirstJointState = 6;
+constexpr int kFirstJointState = 6;
 
 /// The root rotation a state's orientation error stands for: R_ref Exp(delta).
-inline Eigen::Matrix3d chart_rotation(const Eigen::Matrix3d& reference, const Eigen::Vector3d& delta) {
-  return reference * body::rotation_exp(delta);
-}
+Eigen::Matrix3d chart_rotation(const Eigen::Matrix3d& reference, const Eigen::Vector3d& delta);
 
 /// Flips the sign of state k in a covariance (the state was reflected: Theta -> pi - Theta).
-inline void flip_state_sign(Eigen::MatrixXd& covariance, Eigen::Index k) {
-  covariance.row(k) *= -1;
-  covariance.col(k) *= -1;
-}
+void flip_state_sign(Eigen::MatrixXd& covariance, Eigen::Index k);
 
 /// The constant-velocity state [pose (n), rate of the pose (n)] holds twice the pose's dimension;
 /// a pose-only state holds it once. Returns n.
@@ -40,8 +36,41 @@ inline Eigen::Index pose_dimension_of(const Eigen::VectorXd& mean, bool with_rat
 /// one-to-one: first into (-pi, pi], then reflected to +-pi - Theta where needed (the same angle;
 /// the sign of that state's covariance row and column flips). With rates (the constant-velocity
 /// state), a reflected Theta's rate changes sign too: d(pi - Theta)/dt = -dTheta/dt.
-inline void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance,
-                                  bool with_rates = false) {
+void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, bool with_rates = false);
+
+/// Expresses the orientation rate (states n+3..n+5 of a state with rates) in a chart whose
+/// reference is turned by `turn` (new reference = old reference * turn): a rate about the old
+/// reference's axes is turn^T times it about the new ones; its covariance rows and columns follow.
+void turn_orientation_rate(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, const Eigen::Matrix3d& turn);
+
+/// Rewrites a Gaussian of the chart after a re-centring (reference `next`, Theta folded) in the
+/// chart before it (reference `previous`, whose Theta values are `previous_mean`): the inverse of
+/// the tracker's re-centring, as the smoother needs it.
+///
+/// Orientation: R_next Exp(e) = R_previous Exp(e') with Exp(e') = D Exp(e), D = R_previous^T R_next,
+/// exact for the mean. D is one frame's update, close to the identity, so the covariance is kept as
+/// it is (its change is of the order of the angle of D times the error). Joints: of Theta's
+/// representatives (Theta + 2k pi, pi - Theta + 2k pi) the one nearest the previous value.
+///
+/// With rates (the constant-velocity state), the orientation rate turns with the chart (exactly,
+/// by D) and a reflected Theta's rate changes sign.
+void to_previous_chart(const Eigen::Matrix3d& previous, const Eigen::Matrix3d& next,
+                       const Eigen::VectorXd& previous_mean, Eigen::VectorXd& mean,
+                       Eigen::MatrixXd& covariance, bool with_rates = false);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE Eigen::Matrix3d chart_rotation(const Eigen::Matrix3d& reference, const Eigen::Vector3d& delta) {
+  return reference * body::rotation_exp(delta);
+}
+
+S2KF_INLINE void flip_state_sign(Eigen::MatrixXd& covariance, Eigen::Index k) {
+  covariance.row(k) *= -1;
+  covariance.col(k) *= -1;
+}
+
+S2KF_INLINE void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, bool with_rates) {
   const Eigen::Index n = pose_dimension_of(mean, with_rates);
   for (Eigen::Index k = kFirstJointState; k < n; ++k) {
     const double folded = std::remainder(mean(k), 2 * kPi);  // (-pi, pi]
@@ -57,11 +86,8 @@ inline void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covari
   }
 }
 
-/// Expresses the orientation rate (states n+3..n+5 of a state with rates) in a chart whose
-/// reference is turned by `turn` (new reference = old reference * turn): a rate about the old
-/// reference's axes is turn^T times it about the new ones; its covariance rows and columns follow.
-inline void turn_orientation_rate(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance,
-                                  const Eigen::Matrix3d& turn) {
+S2KF_INLINE void turn_orientation_rate(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance,
+                                       const Eigen::Matrix3d& turn) {
   const Eigen::Index r = mean.size() / 2 + 3;
   const Eigen::Matrix3d t = turn.transpose();
   mean.segment<3>(r) = (t * mean.segment<3>(r)).eval();
@@ -69,20 +95,9 @@ inline void turn_orientation_rate(Eigen::VectorXd& mean, Eigen::MatrixXd& covari
   covariance.middleCols<3>(r) = (covariance.middleCols<3>(r) * turn).eval();
 }
 
-/// Rewrites a Gaussian of the chart after a re-centring (reference `next`, Theta folded) in the
-/// chart before it (reference `previous`, whose Theta values are `previous_mean`): the inverse of
-/// the tracker's re-centring, as the smoother needs it.
-///
-/// Orientation: R_next Exp(e) = R_previous Exp(e') with Exp(e') = D Exp(e), D = R_previous^T R_next,
-/// exact for the mean. D is one frame's update, close to the identity, so the covariance is kept as
-/// it is (its change is of the order of the angle of D times the error). Joints: of Theta's
-/// representatives (Theta + 2k pi, pi - Theta + 2k pi) the one nearest the previous value.
-///
-/// With rates (the constant-velocity state), the orientation rate turns with the chart (exactly,
-/// by D) and a reflected Theta's rate changes sign.
-inline void to_previous_chart(const Eigen::Matrix3d& previous, const Eigen::Matrix3d& next,
-                              const Eigen::VectorXd& previous_mean, Eigen::VectorXd& mean,
-                              Eigen::MatrixXd& covariance, bool with_rates = false) {
+S2KF_INLINE void to_previous_chart(const Eigen::Matrix3d& previous, const Eigen::Matrix3d& next,
+                                   const Eigen::VectorXd& previous_mean, Eigen::VectorXd& mean,
+                                   Eigen::MatrixXd& covariance, bool with_rates) {
   const Eigen::Matrix3d d = previous.transpose() * next;
   mean.segment<3>(3) = body::rotation_log(d * body::rotation_exp(mean.segment<3>(3)));
   const Eigen::Index n = pose_dimension_of(mean, with_rates);
@@ -105,5 +120,7 @@ inline void to_previous_chart(const Eigen::Matrix3d& previous, const Eigen::Matr
     }
   }
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <s2kf/core/compilation_mode.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -134,7 +135,14 @@ struct TrackerOptions {
 /// Q_r = 25 mm^2 per frame, and 1e-10 for orientation and joints per frame; initial orientation 0
 /// with variance 1e-6, joints at mid-range with variance 1e-10, root from the marker mean. They are
 /// kept for comparison: with them the joints can barely move (docs/tracking.md shows the result).
-inline TrackerOptions paper_preset(double rate_hz) {
+TrackerOptions paper_preset(double rate_hz);
+
+TrackerOptions preset_options(const std::string& name, double rate_hz);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE TrackerOptions paper_preset(double rate_hz) {
   TrackerOptions o;
   o.preset = "paper";
   o.samples = 301;
@@ -156,10 +164,12 @@ inline TrackerOptions paper_preset(double rate_hz) {
   return o;
 }
 
-inline TrackerOptions preset_options(const std::string& name, double rate_hz) {
+S2KF_INLINE TrackerOptions preset_options(const std::string& name, double rate_hz) {
   if (name == "default") return TrackerOptions{};
   if (name == "paper") return paper_preset(rate_hz);
   throw std::invalid_argument("unknown preset '" + name + "' (use default or paper)");
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

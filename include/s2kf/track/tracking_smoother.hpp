@@ -37,17 +37,7 @@ class TrackingSmoother {
 
   /// Keeps the tracker's posterior after the frame that is row `row` of the motion table. Call it
   /// after every tracker.process(); frames before tracking starts are skipped.
-  void record(const Tracker& tracker, Eigen::Index row) {
-    if (!tracker.estimate().tracked) return;
-    if (!rows_.empty() && row != rows_.back() + 1)
-      throw std::invalid_argument("TrackingSmoother::record: tracked frames must come one after another");
-    if (tracker.motion_state().dimension() != process_noise_.rows())
-      throw std::invalid_argument(
-          "TrackingSmoother::record: the tracker is not the one the smoother was made for");
-    states_.push_back(tracker.motion_state());
-    references_.push_back(tracker.reference_rotation());
-    rows_.push_back(row);
-  }
+  void record(const Tracker& tracker, Eigen::Index row);
 
   std::size_t frames() const { return states_.size(); }
 
@@ -57,9 +47,7 @@ class TrackingSmoother {
 
  private:
   /// Step k+1's chart differs from step k's by the tracker's re-centring (state_chart.hpp).
-  void to_chart_of(std::size_t k, Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) const {
-    to_previous_chart(references_[k], references_[k + 1], states_[k].mean, mean, covariance, with_rates_);
-  }
+  void to_chart_of(std::size_t k, Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) const;
 
   body::BoundedJoints joints_;
   Eigen::MatrixXd transition_, process_noise_;
@@ -89,6 +77,23 @@ S2KF_INLINE void TrackingSmoother::smooth(io::MotionTable& motion) const {
     motion.values.row(row).tail(joints) = joints_.angles(m.segment(kFirstJointState, joints)).transpose();
   }
 }
+S2KF_INLINE void TrackingSmoother::record(const Tracker& tracker, Eigen::Index row) {
+  if (!tracker.estimate().tracked) return;
+  if (!rows_.empty() && row != rows_.back() + 1)
+    throw std::invalid_argument("TrackingSmoother::record: tracked frames must come one after another");
+  if (tracker.motion_state().dimension() != process_noise_.rows())
+    throw std::invalid_argument(
+        "TrackingSmoother::record: the tracker is not the one the smoother was made for");
+  states_.push_back(tracker.motion_state());
+  references_.push_back(tracker.reference_rotation());
+  rows_.push_back(row);
+}
+
+S2KF_INLINE void TrackingSmoother::to_chart_of(std::size_t k, Eigen::VectorXd& mean,
+                                               Eigen::MatrixXd& covariance) const {
+  to_previous_chart(references_[k], references_[k + 1], states_[k].mean, mean, covariance, with_rates_);
+}
+
 #endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track

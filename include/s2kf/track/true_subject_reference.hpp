@@ -7,6 +7,7 @@
 #pragma once
 
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
@@ -21,7 +22,12 @@ namespace s2kf::track {
 /// The true-subject fit of every frame of `recording`, which `subject` was simulated on (its
 /// points are the subject's markers in order), as a motion table like the tracker's. A frame
 /// without any visible marker has no fit: NaN row (compare_with_truth skips it).
-inline io::MotionTable true_subject_fit(const sim::Subject& subject, const sim::Recording& recording) {
+io::MotionTable true_subject_fit(const sim::Subject& subject, const sim::Recording& recording);
+
+// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
+#if S2KF_DEFINE_HEAVY
+
+S2KF_INLINE io::MotionTable true_subject_fit(const sim::Subject& subject, const sim::Recording& recording) {
   if (recording.labels != subject.marker_names ||
       recording.truth.size() != static_cast<std::size_t>(recording.frames()))
     throw std::invalid_argument("true_subject_fit: the recording was not simulated on this subject");
@@ -44,5 +50,7 @@ inline io::MotionTable true_subject_fit(const sim::Subject& subject, const sim::
   }
   return table;
 }
+
+#endif  // S2KF_DEFINE_HEAVY
 
 }  // namespace s2kf::track
