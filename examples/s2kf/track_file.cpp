@@ -9,7 +9,6 @@
 #include "inferred_marker_set.hpp"
 #include "interruption.hpp"
 #include "marker_set_json.hpp"
-#include "recording_batch.hpp"
 #include "track_summary.hpp"
 #include "tracker_samples.hpp"
 #include "viewer/result_page.hpp"  // --html
