@@ -6,9 +6,9 @@
 #include "bindings.hpp"
 #include "numpy_bridge.hpp"
 #include "streaming_tracker.hpp"
+#include "track_pipeline.hpp"
 
-#include "marker_set_json.hpp"  // examples/s2kf: bundled marker sets, the automatic choice, messages
-#include "track_summary.hpp"    // examples/s2kf: the summary `s2kf track` writes
+#include "command.hpp"  // examples/s2kf: the program's error type, cli::UserError
 
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/io/atomic_file.hpp>
@@ -34,9 +34,6 @@ namespace s2kf::python {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// Memory --smooth may take before it refuses a recording (as `s2kf track`).
-constexpr double kSmoothingMemoryLimitBytes = 8e9;
 
 /// Frames read in place from a C-ordered (F, P, 3) float64 array: no copy of the recording. A
 /// point is visible where its coordinates are finite.
@@ -67,110 +64,12 @@ class ArrayFrameSource : public FrameSource {
   double rate_;
 };
 
-struct TrackSettings {
-  std::string markerset, subject;
-  bool calibrate = true;
-  std::int64_t calibration_frames = 1200;
-  double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
-  bool smooth = false;
-  int samples = 301;
-  double height_mm = 0;
-  std::string preset = "default";
-  std::string method = "s2kf";
-};
-
-/// A tracked recording: the session it was tracked with, the run, and the program's summary.
-struct TrackResult {
-  std::string name;  // the .mot file's first line: the recording's file stem
-  track::Session session;
-  track::TrackingRun run;
-  SampleSet samples;
-  std::vector<std::string> messages;
-  nlohmann::json summary;
-  Eigen::Index point_count = 0;
-};
-
 /// The program's error sentences as Python exceptions: a missing file is FileNotFoundError.
 [[noreturn]] void raise_user_error(const std::string& message) {
   const bool missing =
       message.find("does not exist") != std::string::npos || message.find("cannot open") != std::string::npos;
   PyErr_SetString(missing ? PyExc_FileNotFoundError : PyExc_ValueError, message.c_str());
   throw py::error_already_set();
-}
-
-/// The pipeline of `s2kf track` (examples/s2kf/command_track.cpp, track_file) without its files:
-/// marker-set choice, session, run, summary. `input` names the recording in messages and the
-/// summary; `raw_labels` (empty, or one per point) give model outputs their names in the ignored
-/// list; `file_warnings` are the C3D reader's. Runs without the GIL; errors are std exceptions
-/// or cli::UserError, translated by the caller.
-std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string& input,
-                                          const std::string& name, const std::vector<std::string>& raw_labels,
-                                          const std::vector<std::string>& file_warnings,
-                                          const TrackSettings& settings) {
-  if (settings.smooth && settings.method != "s2kf")
-    throw cli::UserError(
-        "smooth works on the S2KF's estimates; it cannot be combined with method='baseline'");
-  if (source.frame_count() == 0) throw cli::UserError(input + ": the recording holds no complete frame");
-  if (settings.smooth && static_cast<double>(source.frame_count()) * track::TrackingSmoother::kBytesPerFrame >
-                             kSmoothingMemoryLimitBytes)
-    throw cli::UserError(
-        input + ": " + std::to_string(source.frame_count()) +
-        " frames are too many to smooth in memory; track without smoothing, or split the recording");
-  const cli::MarkerSetChoice choice =
-      cli::choose_marker_set_for(source.labels(), settings.markerset, settings.subject);
-  track::SessionOptions session_options;
-  try {
-    session_options.tracker = track::preset_options(settings.preset, source.rate_hz());
-  } catch (const std::invalid_argument& e) {
-    throw cli::UserError(e.what());
-  }
-  if (settings.samples > 0) session_options.tracker.samples = settings.samples;
-  session_options.height_mm = settings.height_mm;
-  session_options.calibrate = settings.calibrate && settings.subject.empty();
-  session_options.calibration_frames = settings.calibration_frames;
-  session_options.calibration.weak_direction_shrink = settings.calibration_shrink;
-
-  auto result = std::make_unique<TrackResult>();
-  result->name = name;
-  result->point_count = static_cast<Eigen::Index>(source.labels().size());
-  result->samples = lcd_sample_set(6 + body::kJointCount, session_options.tracker.samples).set;
-  track::Session& session = result->session;
-  try {
-    session = track::prepare_session(source, choice.set, session_options, result->samples);
-  } catch (const std::invalid_argument& e) {
-    throw cli::UserError(input + ": " + e.what());
-  }
-  // Model outputs never match a marker; the summary lists each under its own name in the file.
-  // The ignored labels are in point order, one per unmatched point, "" for every model output.
-  std::vector<std::string> output_names;
-  for (std::size_t p = 0; p < raw_labels.size(); ++p)
-    if (source.labels()[p].empty()) output_names.push_back(raw_labels[p]);
-  std::size_t next_output = 0;
-  for (std::string& label : session.mapping.ignored_labels)
-    if (label.empty() && next_output < output_names.size()) label = output_names[next_output++];
-  std::vector<std::string> warnings = file_warnings;
-  warnings.insert(warnings.end(), session.warnings.begin(), session.warnings.end());
-  result->messages = cli::marker_set_messages(choice, session.mapping);
-
-  track::RunOptions run_options;
-  run_options.method = settings.method == "s2kf" ? track::Method::s2kf : track::Method::baseline;
-  run_options.smooth = settings.smooth;
-  track::TrackingRun& run = result->run;
-  try {
-    run = track::run_session(session, source, result->samples, run_options);
-  } catch (const std::invalid_argument& e) {
-    throw cli::UserError(input + ": " + e.what());
-  }
-  if (run.frames_tracked == 0)
-    throw cli::UserError(input + ": no frame has the " +
-                         std::to_string(session.tracker.min_markers_to_start) +
-                         " visible markers needed to start tracking");
-  warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
-
-  // The summary, field for field as `s2kf track` writes PREFIX.json (the same builder).
-  result->summary = cli::track_summary(input, settings.method, choice, result->messages, session, run,
-                                       settings.smooth, warnings, settings.calibration_shrink);
-  return result;
 }
 
 /// The CLI's checks on the settings (its option ranges), as ValueError.
