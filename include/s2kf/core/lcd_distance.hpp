@@ -290,28 +290,28 @@ S2KF_INLINE void detail::gauss_legendre(int n, std::vector<double>& nodes, std::
   nodes.assign(static_cast<std::size_t>(n), 0.0);
   weights.assign(static_cast<std::size_t>(n), 0.0);
   const double pi = kPi;
+  // P_n(x) (p0) and P_{n-1}(x) (p1) by the three-term recurrence.
+  const auto legendre = [n](double x, double& p0, double& p1) {
+    p0 = 1.0;
+    p1 = 0.0;
+    for (int j = 1; j <= n; ++j) {
+      const double p2 = p1;
+      p1 = p0;
+      p0 = ((2.0 * j - 1.0) * x * p1 - (j - 1.0) * p2) / j;
+    }
+  };
   for (int i = 0; i < (n + 1) / 2; ++i) {
     double x = std::cos(pi * (i + 0.75) / (n + 0.5));
-    double derivative = 0.0;
+    double derivative = 0.0, p0 = 0.0, p1 = 0.0;
     for (int iteration = 0; iteration < 100; ++iteration) {
-      double p0 = 1.0, p1 = 0.0;
-      for (int j = 1; j <= n; ++j) {
-        const double p2 = p1;
-        p1 = p0;
-        p0 = ((2.0 * j - 1.0) * x * p1 - (j - 1.0) * p2) / j;
-      }
+      legendre(x, p0, p1);
       derivative = n * (x * p0 - p1) / (x * x - 1.0);
       const double step = p0 / derivative;
       x -= step;
       if (std::abs(step) <= 1e-16) break;
     }
     // One more derivative at the converged node for the weight.
-    double p0 = 1.0, p1 = 0.0;
-    for (int j = 1; j <= n; ++j) {
-      const double p2 = p1;
-      p1 = p0;
-      p0 = ((2.0 * j - 1.0) * x * p1 - (j - 1.0) * p2) / j;
-    }
+    legendre(x, p0, p1);
     derivative = n * (x * p0 - p1) / (x * x - 1.0);
     const double weight = 2.0 / ((1.0 - x * x) * derivative * derivative);
     nodes[static_cast<std::size_t>(i)] = -x;
