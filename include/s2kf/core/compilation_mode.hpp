@@ -4,8 +4,10 @@
 /// The tracker, the subject calibration, the baseline, the smoother and the session each
 /// instantiate the filter's update and hundreds of Eigen kernels; a translation unit that merely
 /// includes them spends 20-40 s in the compiler, because C++ instantiates every template an inline
-/// body uses, called or not. Those functions are therefore declared first and defined under
-/// `#if S2KF_DEFINE_HEAVY`:
+/// body uses, called or not, and the many small functions around them (kinematics, charts, files)
+/// add up the same way. Every function that is not a template and does more than a line or two is
+/// therefore declared where it belongs and defined under `#if S2KF_DEFINE_HEAVY` at the end of its
+/// header:
 ///
 /// - default (header-only): the definitions are `inline` and every translation unit sees them;
 /// - `S2KF_COMPILED` (the CMake target `s2kf::compiled` sets it): translation units see the
