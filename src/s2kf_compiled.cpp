@@ -3,3 +3,7 @@
 // declarations; here every definition is emitted once (include/s2kf/core/compilation_mode.hpp).
 #define S2KF_BUILDING_COMPILED
 #include <s2kf/s2kf.hpp>
+
+// The dynamic-size filter's own functions (the tracker's and most users' filter); the model-typed
+// predict() and update() stay with their callers (smart_sampling_kalman_filter.hpp).
+template class s2kf::SmartSamplingKalmanFilter<Eigen::Dynamic>;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <s2kf/core/chi_square.hpp>
+#include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/gaussian.hpp>
 #include <s2kf/core/sample_set.hpp>
@@ -88,15 +89,7 @@ class SmartSamplingKalmanFilter {
   const std::vector<Eigen::Index>& rejected_blocks() const { return rejected_blocks_; }
 
   /// Closed-form linear prediction x <- A x + w, w ~ N(0, Q).
-  FilterStatus predict_linear(State& state, const Eigen::MatrixXd& a, const Eigen::MatrixXd& q) const {
-    const Eigen::Index n = state.dimension();
-    check_square(q, n, "predict_linear: Q");
-    check_square(a, n, "predict_linear: A");
-    state.mean = (a * state.mean).eval();
-    state.covariance = (a * state.covariance * a.transpose() + q).eval();
-    symmetrize(state.covariance);
-    return FilterStatus::ok;
-  }
+  FilterStatus predict_linear(State& state, const Eigen::MatrixXd& a, const Eigen::MatrixXd& q) const;
 
   /// Random walk x <- x + w, w ~ N(0, Q): only the covariance grows.
   FilterStatus predict_random_walk(State& state, const Eigen::MatrixXd& q) const {
@@ -109,20 +102,11 @@ class SmartSamplingKalmanFilter {
   /// m <- sum w_i f(x_i), C <- sum w_i (f(x_i) - m)(f(x_i) - m)^T + Q.
   template <typename SystemModel>
   FilterStatus predict(State& state, SystemModel&& f, const Eigen::MatrixXd& q) {
-    const Eigen::Index n = state.dimension();
-    check_square(q, n, "predict: Q");
+    check_square(q, state.dimension(), "predict: Q");
     if (const FilterStatus s = draw_samples(state.mean, state.covariance); s != FilterStatus::ok) return s;
-    propagated_.resize(n, samples_.count());
+    propagated_.resize(state.dimension(), samples_.count());
     f(static_cast<const Eigen::MatrixXd&>(x_), propagated_);
-    if (!propagated_.allFinite()) return FilterStatus::non_finite_model_output;
-    const Eigen::VectorXd mean = propagated_ * samples_.weights;
-    propagated_.colwise() -= mean;
-    Eigen::MatrixXd covariance = q;
-    add_weighted_outer(propagated_, covariance);
-    state.mean = mean;
-    state.covariance = covariance;
-    symmetrize(state.covariance);
-    return FilterStatus::ok;
+    return finish_predict(state, q);
   }
 
   /// Measurement update y = h(x) + v, v ~ N(0, R), with every component observed.
@@ -138,82 +122,15 @@ class SmartSamplingKalmanFilter {
   template <typename MeasurementModel>
   UpdateResult update(State& state, MeasurementModel&& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
                       const ObservedMask& observed, const UpdateOptions& options = {}) {
-    const Eigen::Index n = state.dimension();
-    const Eigen::Index m = y.size();
-    if (samples_.dimension() != n)
-      throw DimensionError("update: the state has dimension " + std::to_string(n) + " but the samples " +
-                           std::to_string(samples_.dimension()));
-    check_square(r, m, "update: R");
-    if (observed.size() != m)
-      throw DimensionError("update: the observed mask must have one entry per component");
-    if (options.iterations < 1) throw DimensionError("update: iterations must be at least 1");
-    if (options.block_size < 1 || m % options.block_size != 0)
-      throw DimensionError("update: the block size must divide the measurement dimension");
-
-    UpdateResult result;
-    rejected_blocks_.clear();
-    if (rejected_blocks_.capacity() < static_cast<std::size_t>(m / options.block_size))
-      rejected_blocks_.reserve(static_cast<std::size_t>(m / options.block_size));  // once, not per step
-    select_observed(observed);
-    const Eigen::Index mo = result.observed = observed_count_;
-    if (mo == 0) {
-      result.status = FilterStatus::nothing_observed;
-      return result;
-    }
-    for (Eigen::Index k = 0; k < mo; ++k)
-      if (!std::isfinite(y(index_(k)))) {
-        result.status = FilterStatus::non_finite_measurement;
-        return result;
-      }
+    // Only the model's evaluation depends on the model's type; everything around it (the checks,
+    // the samples, the moments, the gain and the update) is compiled once per state dimension, so
+    // a new model costs its own code and not another copy of the filter.
+    UpdateResult result = begin_update(state, y, r, observed, options);
+    if (!result.ok()) return result;
     if (options.iterations > 1) return iterated_update(state, h, y, r, options, result);
-
     if ((result.status = draw_samples(state.mean, state.covariance)) != FilterStatus::ok) return result;
-    if ((result.status = evaluate_observed(h, m)) != FilterStatus::ok) return result;
-
-    // Cyy = sum w (y_i - y^)(y_i - y^)^T + R_oo and Cyx = sum w (y_i - y^)(x_i - m)^T, using the
-    // exactly zero-mean deviations S z_i for x.
-    auto cyy = cyy_buffer(mo);
-    for (Eigen::Index j = 0; j < mo; ++j)
-      for (Eigen::Index i = j; i < mo; ++i) cyy(i, j) = r(index_(i), index_(j));
-    auto cyx = cyx_buffer(mo, n);
-    accumulate_moments(cyy, cyx, options.single_precision_moments && positive_weights_);
-    // The outlier gate reads each marker's predicted covariance off the diagonal blocks of Cyy and
-    // drops the rows (and columns) of the blocks it rejects.
-    if (options.block_gate_probability > 0 && positive_weights_)
-      result.observed = reject_outlying_blocks(y, options);
-    const Eigen::Index mo_kept = result.observed;
-    result.rejected_blocks = static_cast<Eigen::Index>(rejected_blocks_.size());
-
-    // Square-root gain: Lyy = chol(Cyy), A^T = Lyy^-1 Cyx, t = Lyy^-1 (y - y^), on the kept rows.
-    auto cyy_kept = cyy_.topLeftCorner(mo_kept, mo_kept);
-    auto cyx_kept = cyx_.topRows(mo_kept);
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(cyy_kept);
-    if (llt.info() != Eigen::Success) {
-      result.status = FilterStatus::innovation_not_positive_definite;
-      return result;
-    }
-    auto innovation = innovation_.head(mo_kept);
-    for (Eigen::Index k = 0; k < mo_kept; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
-    solve_lower_in_place(llt.matrixLLT(), cyx_kept);
-    llt.matrixL().solveInPlace(innovation);
-    result.nis = innovation.squaredNorm();
-    if (gated(result.nis, mo_kept, options)) {
-      result.status = FilterStatus::gated;
-      return result;
-    }
-    // C+ = C - A A^T must stay positive definite; check on a copy before touching the state.
-    posterior_covariance_ = state.covariance;
-    posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(cyx_kept.transpose(), -1.0);
-    posterior_covariance_.template triangularView<Eigen::StrictlyUpper>() =
-        posterior_covariance_.transpose().template triangularView<Eigen::StrictlyUpper>();
-    factor_.compute(posterior_covariance_);
-    if (factor_.info() != Eigen::Success) {
-      result.status = FilterStatus::posterior_not_positive_definite;
-      return result;
-    }
-    state.mean.noalias() += cyx_kept.transpose() * innovation;
-    state.covariance = posterior_covariance_;
-    return result;
+    if ((result.status = evaluate_observed(h, y.size())) != FilterStatus::ok) return result;
+    return finish_update(state, y, r, options, result);
   }
 
  private:
@@ -242,47 +159,24 @@ class SmartSamplingKalmanFilter {
       if (observed(i)) index_(observed_count_++) = i;
   }
 
+  /// The checks of update() and the observed components; a status other than ok ends the update.
+  UpdateResult begin_update(const State& state, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                            const ObservedMask& observed, const UpdateOptions& options);
+
+  /// After the model's evaluation: the moments, the square-root gain and the update of `state`.
+  UpdateResult finish_update(State& state, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                             const UpdateOptions& options, UpdateResult result);
+
+  /// After the system model's evaluation (in propagated_): the predicted mean and covariance.
+  FilterStatus finish_predict(State& state, const Eigen::MatrixXd& q);
+
   /// x_i = m + S z_i with S the lower Cholesky factor of C; keeps the deviations S z_i in x_dev_.
-  template <typename Mean, typename Covariance>
-  FilterStatus draw_samples(const Mean& mean, const Covariance& covariance) {
-    if (samples_.dimension() != mean.size())
-      throw DimensionError("the state has dimension " + std::to_string(mean.size()) + " but the samples " +
-                           std::to_string(samples_.dimension()));
-    factor_.compute(covariance);
-    if (factor_.info() != Eigen::Success || !mean.allFinite())
-      return FilterStatus::prior_not_positive_definite;
-    if (symmetric_ && !keep_full_deviations_) {
-      // S (-z) = -(S z) exactly: map the half set only, then mirror it.
-      const Eigen::Index h = half_count_, o = origin_count_;
-      half_deviation_.resize(mean.size(), h);
-      for (Eigen::Index k = 0; k < h; k += kChunk) {
-        const Eigen::Index c = std::min(kChunk, h - k);
-        half_deviation_.middleCols(k, c).noalias() = factor_.matrixL() * samples_.points.middleCols(o + k, c);
-      }
-      x_.resize(mean.size(), samples_.count());
-      if (o == 1) x_.col(0) = mean;
-      x_.middleCols(o, h) = half_deviation_.colwise() + mean;
-      x_.rightCols(h) = (-half_deviation_).colwise() + mean;
-      return FilterStatus::ok;
-    }
-    x_dev_.noalias() = factor_.matrixL() * samples_.points;
-    x_ = x_dev_;
-    x_.colwise() += mean;
-    return FilterStatus::ok;
-  }
+  FilterStatus draw_samples(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                            const Eigen::Ref<const Eigen::MatrixXd>& covariance);
 
   /// Recognises the symmetric layout of symmetric_set and ukf_sample_set: an optional origin first,
   /// then +s_1..+s_h, then -s_1..-s_h, with equal weights within each pair (exact comparisons).
-  void detect_symmetry() {
-    const Eigen::Index count = samples_.count();
-    origin_count_ = count % 2;
-    half_count_ = count / 2;
-    const Eigen::Index h = half_count_, o = origin_count_;
-    symmetric_ = positive_weights_ && h > 0 && (o == 0 || samples_.points.col(0).isZero(0)) &&
-                 samples_.points.middleCols(o, h) == -samples_.points.rightCols(h) &&
-                 samples_.weights.segment(o, h) == samples_.weights.tail(h);
-    equal_weights_ = (samples_.weights.array() == samples_.weights(0)).all();
-  }
+  void detect_symmetry();
 
   /// Eigen's matrix products take their packing buffers from the stack up to 128 KiB and from the
   /// heap beyond; products over at most kChunk samples (150 x 96 doubles) stay on the stack, so a
@@ -301,19 +195,7 @@ class SmartSamplingKalmanFilter {
   /// rows; larger systems are split in halves, X1 = L11^-1 B1, B2 -= L21 X1, X2 = L22^-1 B2, so
   /// every piece stays on the stack and a step does not allocate.
   static void solve_lower_in_place(const Eigen::Ref<const Eigen::MatrixXd>& lower,
-                                   Eigen::Ref<Eigen::MatrixXd> b) {
-    const Eigen::Index n = lower.rows();
-    if (n <= kChunk) {
-      lower.template triangularView<Eigen::Lower>().solveInPlace(b);
-      return;
-    }
-    const Eigen::Index h = n / 2;
-    auto top = b.topRows(h);
-    auto bottom = b.bottomRows(n - h);
-    solve_lower_in_place(lower.topLeftCorner(h, h), top);
-    bottom.noalias() -= lower.bottomLeftCorner(n - h, h) * top;
-    solve_lower_in_place(lower.bottomRightCorner(n - h, n - h), bottom);
-  }
+                                   Eigen::Ref<Eigen::MatrixXd> b);
 
   /// Columns times sqrt(w_i); one scalar when all weights are equal.
   template <typename Block>
@@ -327,97 +209,22 @@ class SmartSamplingKalmanFilter {
   /// Runs h on the current samples, keeps the observed rows as deviations from their weighted mean.
   template <typename MeasurementModel>
   FilterStatus evaluate_observed(MeasurementModel& h, Eigen::Index m) {
-    const Eigen::Index mo = observed_count_;
-    const Eigen::Index count = samples_.count();
-    if (y_dev_.rows() < m || y_dev_.cols() != count)
-      y_dev_.resize(std::max<Eigen::Index>(y_dev_.rows(), m), count);
-    // With every component observed the model writes straight into y_dev_ (no gather).
-    const bool direct = mo == m && y_dev_.rows() == m;
-    // Sized even when unused now, so that a later frame with hidden rows does not allocate.
-    predictions_.resize(m, count);
-    h(static_cast<const Eigen::MatrixXd&>(x_), direct ? y_dev_ : predictions_);
-    if (symmetric_ && (pair_difference_.rows() < m || pair_difference_.cols() != half_count_))
-      pair_difference_.resize(std::max<Eigen::Index>(pair_difference_.rows(), m), half_count_);
-    y_mean_.resize(std::max<Eigen::Index>(y_mean_.size(), m));
-    auto y_mean = y_mean_.head(mo);
-    y_mean.setZero();
-    // Gather the observed rows a column at a time (both matrices are column-major) and add the
-    // column to the weighted mean while it is in cache.
-    const Eigen::Index* index = index_.data();
-    for (Eigen::Index i = 0; i < count; ++i) {
-      auto to = y_dev_.col(i).head(mo);
-      if (direct) {
-        // already there
-      } else if (mo == m) {
-        to = predictions_.col(i);
-      } else {
-        const double* from = predictions_.col(i).data();
-        for (Eigen::Index k = 0; k < mo; ++k) to(k) = from[index[k]];
-      }
-      y_mean += samples_.weights(i) * to;
-    }
-    // A NaN or infinite prediction makes its row's weighted mean NaN or infinite whatever the
-    // weight (0 * inf is NaN), so checking the mean checks every prediction.
-    if (!y_mean.allFinite()) return FilterStatus::non_finite_model_output;
-    y_dev_.topRows(mo).colwise() -= y_mean;
-    return FilterStatus::ok;
+    Eigen::MatrixXd& predictions = prepare_predictions(m);
+    h(static_cast<const Eigen::MatrixXd&>(x_), predictions);
+    return gather_observed(m);
   }
+
+  /// Sizes the buffers for m predicted components and returns the one the model writes into: with
+  /// every component observed the model writes straight into y_dev_ (no gather).
+  Eigen::MatrixXd& prepare_predictions(Eigen::Index m);
+
+  /// The observed rows of the model's predictions as deviations from their weighted mean, in y_dev_.
+  FilterStatus gather_observed(Eigen::Index m);
 
   /// The lower half of Cyy += sum w (y_i - y^)(y_i - y^)^T and Cyx = sum w (y_i - y^)(x_i - m)^T
   /// over the observed rows in y_dev_ (deviations) and x_dev_ / half_deviation_ (S z_i).
-  template <typename Cyy, typename Cyx>
-  void accumulate_moments(Cyy& cyy, Cyx& cyx, bool single_precision) {
-    const Eigen::Index mo = observed_count_;
-    auto y_dev = y_dev_.topRows(mo);
-    if (symmetric_) {
-      // Pairs +s_k, -s_k with equal weights: sum over a pair of w (y_i - y^)(x_i - m)^T is
-      // w (y+_k - y-_k) s_k^T (y^ cancels), so Cyx costs half the product over all samples.
-      const Eigen::Index h = half_count_, o = origin_count_;
-      half_deviation_ = half_deviation_ * sqrt_weights_.segment(o, h).asDiagonal();
-      if (single_precision) {
-        // sqrt(w_i) (y_i - y^), scaled in double and rounded once.
-        auto y_dev_f = single_buffer(y_dev_f_, mo, y_dev.cols());
-        if (equal_weights_)
-          y_dev_f = (sqrt_weights_(0) * y_dev).template cast<float>();
-        else
-          y_dev_f = (y_dev * sqrt_weights_.asDiagonal()).template cast<float>();
-        auto cyy_f = single_buffer(cyy_f_, mo, mo);
-        cyy_f.template triangularView<Eigen::Lower>().setZero();
-        rank_update_lower(cyy_f, y_dev_f);
-        cyy.template triangularView<Eigen::Lower>() += cyy_f.template cast<double>();
-        auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
-        pair_difference_f.noalias() = y_dev_f.middleCols(o, h) - y_dev_f.rightCols(h);
-        auto half_f = single_buffer(half_deviation_f_, half_deviation_.rows(), h);
-        half_f = half_deviation_.template cast<float>();
-        auto cyx_f = single_buffer(cyx_f_, mo, cyx.cols());
-        cyx_f.setZero();
-        for (Eigen::Index k = 0; k < h; k += kChunk) {
-          const Eigen::Index c = std::min(kChunk, h - k);
-          cyx_f.noalias() += pair_difference_f.middleCols(k, c) * half_f.middleCols(k, c).transpose();
-        }
-        cyx = cyx_f.template cast<double>();
-        return;
-      }
-      scale_columns_by_sqrt_weights(y_dev);
-      rank_update_lower(cyy, y_dev);
-      auto pair_difference = pair_difference_.topRows(mo);
-      pair_difference.noalias() = y_dev.middleCols(o, h) - y_dev.rightCols(h);
-      cyx.setZero();
-      for (Eigen::Index k = 0; k < h; k += kChunk) {
-        const Eigen::Index c = std::min(kChunk, h - k);
-        cyx.noalias() += pair_difference.middleCols(k, c) * half_deviation_.middleCols(k, c).transpose();
-      }
-    } else if (positive_weights_) {
-      scale_columns_by_sqrt_weights(y_dev);
-      rank_update_lower(cyy, y_dev);
-      x_dev_ = x_dev_ * sqrt_weights_.asDiagonal();
-      cyx.noalias() = y_dev * x_dev_.transpose();
-    } else {
-      cyy.template triangularView<Eigen::Lower>() +=
-          y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
-      cyx.noalias() = y_dev * samples_.weights.asDiagonal() * x_dev_.transpose();
-    }
-  }
+  void accumulate_moments(Eigen::Block<Eigen::MatrixXd>& cyy, Eigen::Block<Eigen::MatrixXd>& cyx,
+                          bool single_precision);
 
   /// The top-left rows x cols of a single-precision scratch matrix, grown when needed.
   static Eigen::Block<Eigen::MatrixXf> single_buffer(Eigen::MatrixXf& buffer, Eigen::Index rows,
@@ -432,66 +239,7 @@ class SmartSamplingKalmanFilter {
   /// block's sample deviations), which is the block's diagonal block of Cyy (lower half, already
   /// accumulated), and removes their rows (and columns) from Cyy, Cyx, the observed indices and the
   /// predicted mean. Returns the number of observed components kept.
-  Eigen::Index reject_outlying_blocks(const Eigen::VectorXd& y, const UpdateOptions& options) {
-    using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
-    using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxBlock, 1>;
-    const Eigen::Index mo = observed_count_, b = options.block_size;
-    if (b > kMaxBlock) throw DimensionError("update: blocks of more than 6 components cannot be gated");
-    // The quantile for as many degrees of freedom as a block has observed components (a bisection
-    // that costs more than the gate itself: computed when the probability changes).
-    if (block_limit_probability_ != options.block_gate_probability) {
-      for (int d = 1; d <= kMaxBlock; ++d)
-        block_limit_[d] = chi_square_quantile(options.block_gate_probability, static_cast<double>(d));
-      block_limit_probability_ = options.block_gate_probability;
-    }
-    const double* limit = block_limit_;
-    Eigen::Index observed_blocks = 0;
-    for (Eigen::Index k = 0; k < mo;) {
-      const Eigen::Index block = index_(k) / b;
-      Eigen::Index end = k;
-      while (end < mo && index_(end) / b == block) ++end;
-      const Eigen::Index d = end - k;
-      Small c(d, d);
-      SmallVector e(d);
-      for (Eigen::Index j = 0; j < d; ++j) {
-        e(j) = y(index_(k + j)) - y_mean_(k + j);
-        for (Eigen::Index i = j; i < d; ++i) c(i, j) = c(j, i) = cyy_(k + i, k + j);
-      }
-      const Eigen::LLT<Small> llt(c);
-      if (llt.info() == Eigen::Success && e.dot(llt.solve(e)) > limit[d]) rejected_blocks_.push_back(block);
-      ++observed_blocks;
-      k = end;
-    }
-    if (rejected_blocks_.empty()) return mo;
-    if (2 * static_cast<Eigen::Index>(rejected_blocks_.size()) > observed_blocks) {
-      rejected_blocks_.clear();
-      return mo;
-    }
-    // The positions (in the observed rows) that stay, in order.
-    Eigen::Index kept = 0;
-    std::size_t next_rejected = 0;
-    for (Eigen::Index k = 0; k < mo; ++k) {
-      const Eigen::Index block = index_(k) / b;
-      while (next_rejected < rejected_blocks_.size() && rejected_blocks_[next_rejected] < block)
-        ++next_rejected;
-      if (next_rejected < rejected_blocks_.size() && rejected_blocks_[next_rejected] == block) continue;
-      kept_(kept++) = k;
-    }
-    // Compact in place: every source position is at or after its destination, and the columns
-    // (then rows) are written in ascending order, so nothing is read after it was overwritten.
-    for (Eigen::Index j = 0; j < kept; ++j) {
-      const Eigen::Index from_j = kept_(j);
-      for (Eigen::Index i = j; i < kept; ++i) cyy_(i, j) = cyy_(kept_(i), from_j);
-    }
-    for (Eigen::Index c = 0; c < cyx_.cols(); ++c)
-      for (Eigen::Index i = 0; i < kept; ++i) cyx_(i, c) = cyx_(kept_(i), c);
-    for (Eigen::Index i = 0; i < kept; ++i) {
-      index_(i) = index_(kept_(i));
-      y_mean_(i) = y_mean_(kept_(i));
-    }
-    observed_count_ = kept;
-    return kept;
-  }
+  Eigen::Index reject_outlying_blocks(const Eigen::VectorXd& y, const UpdateOptions& options);
   static constexpr int kMaxBlock = 6;
 
   Eigen::Block<Eigen::MatrixXd> cyy_buffer(Eigen::Index mo) {
@@ -504,69 +252,38 @@ class SmartSamplingKalmanFilter {
     return cyx_.topRows(mo);
   }
 
-  /// Weighted outer product sum_i w_i d_i d_i^T added to `out` (d_i the columns of `deviations`).
-  void add_weighted_outer(const Eigen::MatrixXd& deviations, Eigen::MatrixXd& out) const {
-    out.noalias() += deviations * samples_.weights.asDiagonal() * deviations.transpose();
-  }
+  /// The iterated update's working copy: the observed y and R and the current posterior.
+  struct Iteration {
+    Eigen::VectorXd y_observed;
+    Eigen::MatrixXd r_observed;
+    Eigen::VectorXd mean;
+    Eigen::MatrixXd covariance;
+  };
 
   /// Posterior linearisation: fit y ~ H x + b (residual covariance Omega) at the current posterior,
   /// update the prior with that linear model, repeat.
   template <typename MeasurementModel>
   UpdateResult iterated_update(State& state, MeasurementModel& h, const Eigen::VectorXd& y,
                                const Eigen::MatrixXd& r, const UpdateOptions& options, UpdateResult result) {
-    const Eigen::Index n = state.dimension();
-    const Eigen::Index m = y.size();
-    const Eigen::Index mo = observed_count_;
-    Eigen::VectorXd y_obs(mo);
-    Eigen::MatrixXd r_obs(mo, mo);
-    for (Eigen::Index i = 0; i < mo; ++i) {
-      y_obs(i) = y(index_(i));
-      for (Eigen::Index j = 0; j < mo; ++j) r_obs(i, j) = r(index_(i), index_(j));
-    }
-    Eigen::VectorXd mean = state.mean;
-    Eigen::MatrixXd covariance = state.covariance;
+    Iteration iteration = begin_iteration(state, y, r);
     keep_full_deviations_ = true;  // this rarely used path works on all deviations
     struct Restore {
       bool& flag;
       ~Restore() { flag = false; }
     } restore{keep_full_deviations_};
     for (int pass = 0; pass < options.iterations; ++pass) {
-      if ((result.status = draw_samples(mean, covariance)) != FilterStatus::ok) return result;
-      if ((result.status = evaluate_observed(h, m)) != FilterStatus::ok) return result;
-      const Eigen::MatrixXd y_dev = y_dev_.topRows(mo);
-      const Eigen::MatrixXd pyy = y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
-      const Eigen::MatrixXd pxy = x_dev_ * samples_.weights.asDiagonal() * y_dev.transpose();
-      // H = Pxy^T C_i^-1 via the Cholesky factor of C_i already in factor_.
-      const Eigen::MatrixXd h_lin = factor_.solve(pxy).transpose();
-      const Eigen::MatrixXd omega = pyy - h_lin * covariance * h_lin.transpose();
-      const Eigen::VectorXd offset = y_mean_.head(mo) - h_lin * mean;
-      Eigen::MatrixXd s = h_lin * state.covariance * h_lin.transpose() + r_obs + omega;
-      symmetrize(s);
-      Eigen::LLT<Eigen::MatrixXd> llt(s);
-      if (llt.info() != Eigen::Success) {
-        result.status = FilterStatus::innovation_not_positive_definite;
+      if ((result.status = draw_samples(iteration.mean, iteration.covariance)) != FilterStatus::ok)
         return result;
-      }
-      const Eigen::VectorXd innovation = y_obs - h_lin * state.mean - offset;
-      const Eigen::MatrixXd gain_t = llt.solve(h_lin * state.covariance);  // K^T = S^-1 H C
-      result.nis = innovation.dot(llt.solve(innovation));
-      mean = state.mean + gain_t.transpose() * innovation;
-      covariance = state.covariance - gain_t.transpose() * s * gain_t;
-      symmetrize(covariance);
+      if ((result.status = evaluate_observed(h, y.size())) != FilterStatus::ok) return result;
+      if ((result.status = iteration_pass(state, iteration, result.nis)) != FilterStatus::ok) return result;
     }
-    if (gated(result.nis, mo, options)) {
-      result.status = FilterStatus::gated;
-      return result;
-    }
-    if (Eigen::LLT<Eigen::MatrixXd>(covariance).info() != Eigen::Success) {
-      result.status = FilterStatus::posterior_not_positive_definite;
-      return result;
-    }
-    (void)n;
-    state.mean = mean;
-    state.covariance = covariance;
-    return result;
+    return finish_iteration(state, iteration, options, result);
   }
+  Iteration begin_iteration(const State& state, const Eigen::VectorXd& y, const Eigen::MatrixXd& r) const;
+  /// One pass on the samples just evaluated; sets the NIS of the linearised update.
+  FilterStatus iteration_pass(const State& state, Iteration& iteration, double& nis);
+  UpdateResult finish_iteration(State& state, const Iteration& iteration, const UpdateOptions& options,
+                                UpdateResult result) const;
 
   SampleSet samples_;
   bool positive_weights_ = true;
@@ -586,11 +303,410 @@ class SmartSamplingKalmanFilter {
   Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> kept_;  ///< observed positions the block gate keeps
   Eigen::MatrixXf y_dev_f_, cyy_f_, pair_difference_f_, half_deviation_f_, cyx_f_;  ///< single precision
   Eigen::Index observed_count_ = 0;
+  bool direct_ = false;  ///< the model writes straight into y_dev_ (see prepare_predictions)
   std::vector<Eigen::Index> rejected_blocks_;  ///< ascending
   double block_limit_probability_ = 0;
   double block_limit_[kMaxBlock + 1] = {};  ///< chi-square quantiles by degrees of freedom
 };
 
+// Out of the class, so that a program that links the compiled library (S2KF_COMPILED) takes
+// these from it for the dynamic-size filter instead of compiling them again (see the end).
+
+template <int Dim>
+FilterStatus SmartSamplingKalmanFilter<Dim>::predict_linear(State& state, const Eigen::MatrixXd& a,
+                                                            const Eigen::MatrixXd& q) const {
+  const Eigen::Index n = state.dimension();
+  check_square(q, n, "predict_linear: Q");
+  check_square(a, n, "predict_linear: A");
+  state.mean = (a * state.mean).eval();
+  state.covariance = (a * state.covariance * a.transpose() + q).eval();
+  symmetrize(state.covariance);
+  return FilterStatus::ok;
+}
+
+template <int Dim>
+FilterStatus SmartSamplingKalmanFilter<Dim>::finish_predict(State& state, const Eigen::MatrixXd& q) {
+  if (!propagated_.allFinite()) return FilterStatus::non_finite_model_output;
+  const Eigen::VectorXd mean = propagated_ * samples_.weights;
+  propagated_.colwise() -= mean;
+  Eigen::MatrixXd covariance = q;
+  covariance.noalias() += propagated_ * samples_.weights.asDiagonal() * propagated_.transpose();
+  state.mean = mean;
+  state.covariance = covariance;
+  symmetrize(state.covariance);
+  return FilterStatus::ok;
+}
+
+template <int Dim>
+UpdateResult SmartSamplingKalmanFilter<Dim>::begin_update(const State& state, const Eigen::VectorXd& y,
+                                                          const Eigen::MatrixXd& r,
+                                                          const ObservedMask& observed,
+                                                          const UpdateOptions& options) {
+  const Eigen::Index n = state.dimension();
+  const Eigen::Index m = y.size();
+  if (samples_.dimension() != n)
+    throw DimensionError("update: the state has dimension " + std::to_string(n) + " but the samples " +
+                         std::to_string(samples_.dimension()));
+  check_square(r, m, "update: R");
+  if (observed.size() != m)
+    throw DimensionError("update: the observed mask must have one entry per component");
+  if (options.iterations < 1) throw DimensionError("update: iterations must be at least 1");
+  if (options.block_size < 1 || m % options.block_size != 0)
+    throw DimensionError("update: the block size must divide the measurement dimension");
+
+  UpdateResult result;
+  rejected_blocks_.clear();
+  if (rejected_blocks_.capacity() < static_cast<std::size_t>(m / options.block_size))
+    rejected_blocks_.reserve(static_cast<std::size_t>(m / options.block_size));  // once, not per step
+  select_observed(observed);
+  const Eigen::Index mo = result.observed = observed_count_;
+  if (mo == 0) {
+    result.status = FilterStatus::nothing_observed;
+    return result;
+  }
+  for (Eigen::Index k = 0; k < mo; ++k)
+    if (!std::isfinite(y(index_(k)))) {
+      result.status = FilterStatus::non_finite_measurement;
+      return result;
+    }
+  return result;
+}
+
+template <int Dim>
+UpdateResult SmartSamplingKalmanFilter<Dim>::finish_update(State& state, const Eigen::VectorXd& y,
+                                                           const Eigen::MatrixXd& r,
+                                                           const UpdateOptions& options,
+                                                           UpdateResult result) {
+  const Eigen::Index n = state.dimension();
+  const Eigen::Index mo = observed_count_;
+
+  // Cyy = sum w (y_i - y^)(y_i - y^)^T + R_oo and Cyx = sum w (y_i - y^)(x_i - m)^T, using the
+  // exactly zero-mean deviations S z_i for x.
+  auto cyy = cyy_buffer(mo);
+  for (Eigen::Index j = 0; j < mo; ++j)
+    for (Eigen::Index i = j; i < mo; ++i) cyy(i, j) = r(index_(i), index_(j));
+  auto cyx = cyx_buffer(mo, n);
+  accumulate_moments(cyy, cyx, options.single_precision_moments && positive_weights_);
+  // The outlier gate reads each marker's predicted covariance off the diagonal blocks of Cyy and
+  // drops the rows (and columns) of the blocks it rejects.
+  if (options.block_gate_probability > 0 && positive_weights_)
+    result.observed = reject_outlying_blocks(y, options);
+  const Eigen::Index mo_kept = result.observed;
+  result.rejected_blocks = static_cast<Eigen::Index>(rejected_blocks_.size());
+
+  // Square-root gain: Lyy = chol(Cyy), A^T = Lyy^-1 Cyx, t = Lyy^-1 (y - y^), on the kept rows.
+  auto cyy_kept = cyy_.topLeftCorner(mo_kept, mo_kept);
+  auto cyx_kept = cyx_.topRows(mo_kept);
+  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(cyy_kept);
+  if (llt.info() != Eigen::Success) {
+    result.status = FilterStatus::innovation_not_positive_definite;
+    return result;
+  }
+  auto innovation = innovation_.head(mo_kept);
+  for (Eigen::Index k = 0; k < mo_kept; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
+  solve_lower_in_place(llt.matrixLLT(), cyx_kept);
+  llt.matrixL().solveInPlace(innovation);
+  result.nis = innovation.squaredNorm();
+  if (gated(result.nis, mo_kept, options)) {
+    result.status = FilterStatus::gated;
+    return result;
+  }
+  // C+ = C - A A^T must stay positive definite; check on a copy before touching the state.
+  posterior_covariance_ = state.covariance;
+  posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(cyx_kept.transpose(), -1.0);
+  posterior_covariance_.template triangularView<Eigen::StrictlyUpper>() =
+      posterior_covariance_.transpose().template triangularView<Eigen::StrictlyUpper>();
+  factor_.compute(posterior_covariance_);
+  if (factor_.info() != Eigen::Success) {
+    result.status = FilterStatus::posterior_not_positive_definite;
+    return result;
+  }
+  state.mean.noalias() += cyx_kept.transpose() * innovation;
+  state.covariance = posterior_covariance_;
+  return result;
+}
+
+template <int Dim>
+FilterStatus SmartSamplingKalmanFilter<Dim>::draw_samples(
+    const Eigen::Ref<const Eigen::VectorXd>& mean, const Eigen::Ref<const Eigen::MatrixXd>& covariance) {
+  if (samples_.dimension() != mean.size())
+    throw DimensionError("the state has dimension " + std::to_string(mean.size()) + " but the samples " +
+                         std::to_string(samples_.dimension()));
+  factor_.compute(covariance);
+  if (factor_.info() != Eigen::Success || !mean.allFinite()) return FilterStatus::prior_not_positive_definite;
+  if (symmetric_ && !keep_full_deviations_) {
+    // S (-z) = -(S z) exactly: map the half set only, then mirror it.
+    const Eigen::Index h = half_count_, o = origin_count_;
+    half_deviation_.resize(mean.size(), h);
+    for (Eigen::Index k = 0; k < h; k += kChunk) {
+      const Eigen::Index c = std::min(kChunk, h - k);
+      half_deviation_.middleCols(k, c).noalias() = factor_.matrixL() * samples_.points.middleCols(o + k, c);
+    }
+    x_.resize(mean.size(), samples_.count());
+    if (o == 1) x_.col(0) = mean;
+    x_.middleCols(o, h) = half_deviation_.colwise() + mean;
+    x_.rightCols(h) = (-half_deviation_).colwise() + mean;
+    return FilterStatus::ok;
+  }
+  x_dev_.noalias() = factor_.matrixL() * samples_.points;
+  x_ = x_dev_;
+  x_.colwise() += mean;
+  return FilterStatus::ok;
+}
+
+template <int Dim>
+void SmartSamplingKalmanFilter<Dim>::detect_symmetry() {
+  const Eigen::Index count = samples_.count();
+  origin_count_ = count % 2;
+  half_count_ = count / 2;
+  const Eigen::Index h = half_count_, o = origin_count_;
+  symmetric_ = positive_weights_ && h > 0 && (o == 0 || samples_.points.col(0).isZero(0)) &&
+               samples_.points.middleCols(o, h) == -samples_.points.rightCols(h) &&
+               samples_.weights.segment(o, h) == samples_.weights.tail(h);
+  equal_weights_ = (samples_.weights.array() == samples_.weights(0)).all();
+}
+
+template <int Dim>
+void SmartSamplingKalmanFilter<Dim>::solve_lower_in_place(const Eigen::Ref<const Eigen::MatrixXd>& lower,
+                                                          Eigen::Ref<Eigen::MatrixXd> b) {
+  const Eigen::Index n = lower.rows();
+  if (n <= kChunk) {
+    lower.template triangularView<Eigen::Lower>().solveInPlace(b);
+    return;
+  }
+  const Eigen::Index h = n / 2;
+  auto top = b.topRows(h);
+  auto bottom = b.bottomRows(n - h);
+  solve_lower_in_place(lower.topLeftCorner(h, h), top);
+  bottom.noalias() -= lower.bottomLeftCorner(n - h, h) * top;
+  solve_lower_in_place(lower.bottomRightCorner(n - h, n - h), bottom);
+}
+
+template <int Dim>
+Eigen::MatrixXd& SmartSamplingKalmanFilter<Dim>::prepare_predictions(Eigen::Index m) {
+  const Eigen::Index mo = observed_count_;
+  const Eigen::Index count = samples_.count();
+  if (y_dev_.rows() < m || y_dev_.cols() != count)
+    y_dev_.resize(std::max<Eigen::Index>(y_dev_.rows(), m), count);
+  // With every component observed the model writes straight into y_dev_ (no gather).
+  direct_ = mo == m && y_dev_.rows() == m;
+  // Sized even when unused now, so that a later frame with hidden rows does not allocate.
+  predictions_.resize(m, count);
+  return direct_ ? y_dev_ : predictions_;
+}
+
+template <int Dim>
+FilterStatus SmartSamplingKalmanFilter<Dim>::gather_observed(Eigen::Index m) {
+  const Eigen::Index mo = observed_count_;
+  const Eigen::Index count = samples_.count();
+  if (symmetric_ && (pair_difference_.rows() < m || pair_difference_.cols() != half_count_))
+    pair_difference_.resize(std::max<Eigen::Index>(pair_difference_.rows(), m), half_count_);
+  y_mean_.resize(std::max<Eigen::Index>(y_mean_.size(), m));
+  auto y_mean = y_mean_.head(mo);
+  y_mean.setZero();
+  // Gather the observed rows a column at a time (both matrices are column-major) and add the
+  // column to the weighted mean while it is in cache.
+  const Eigen::Index* index = index_.data();
+  for (Eigen::Index i = 0; i < count; ++i) {
+    auto to = y_dev_.col(i).head(mo);
+    if (direct_) {
+      // already there
+    } else if (mo == m) {
+      to = predictions_.col(i);
+    } else {
+      const double* from = predictions_.col(i).data();
+      for (Eigen::Index k = 0; k < mo; ++k) to(k) = from[index[k]];
+    }
+    y_mean += samples_.weights(i) * to;
+  }
+  // A NaN or infinite prediction makes its row's weighted mean NaN or infinite whatever the
+  // weight (0 * inf is NaN), so checking the mean checks every prediction.
+  if (!y_mean.allFinite()) return FilterStatus::non_finite_model_output;
+  y_dev_.topRows(mo).colwise() -= y_mean;
+  return FilterStatus::ok;
+}
+
+template <int Dim>
+void SmartSamplingKalmanFilter<Dim>::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& cyy,
+                                                        Eigen::Block<Eigen::MatrixXd>& cyx,
+                                                        bool single_precision) {
+  const Eigen::Index mo = observed_count_;
+  auto y_dev = y_dev_.topRows(mo);
+  if (symmetric_) {
+    // Pairs +s_k, -s_k with equal weights: sum over a pair of w (y_i - y^)(x_i - m)^T is
+    // w (y+_k - y-_k) s_k^T (y^ cancels), so Cyx costs half the product over all samples.
+    const Eigen::Index h = half_count_, o = origin_count_;
+    half_deviation_ = half_deviation_ * sqrt_weights_.segment(o, h).asDiagonal();
+    if (single_precision) {
+      // sqrt(w_i) (y_i - y^), scaled in double and rounded once.
+      auto y_dev_f = single_buffer(y_dev_f_, mo, y_dev.cols());
+      if (equal_weights_)
+        y_dev_f = (sqrt_weights_(0) * y_dev).template cast<float>();
+      else
+        y_dev_f = (y_dev * sqrt_weights_.asDiagonal()).template cast<float>();
+      auto cyy_f = single_buffer(cyy_f_, mo, mo);
+      cyy_f.template triangularView<Eigen::Lower>().setZero();
+      rank_update_lower(cyy_f, y_dev_f);
+      cyy.template triangularView<Eigen::Lower>() += cyy_f.template cast<double>();
+      auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
+      pair_difference_f.noalias() = y_dev_f.middleCols(o, h) - y_dev_f.rightCols(h);
+      auto half_f = single_buffer(half_deviation_f_, half_deviation_.rows(), h);
+      half_f = half_deviation_.template cast<float>();
+      auto cyx_f = single_buffer(cyx_f_, mo, cyx.cols());
+      cyx_f.setZero();
+      for (Eigen::Index k = 0; k < h; k += kChunk) {
+        const Eigen::Index c = std::min(kChunk, h - k);
+        cyx_f.noalias() += pair_difference_f.middleCols(k, c) * half_f.middleCols(k, c).transpose();
+      }
+      cyx = cyx_f.template cast<double>();
+      return;
+    }
+    scale_columns_by_sqrt_weights(y_dev);
+    rank_update_lower(cyy, y_dev);
+    auto pair_difference = pair_difference_.topRows(mo);
+    pair_difference.noalias() = y_dev.middleCols(o, h) - y_dev.rightCols(h);
+    cyx.setZero();
+    for (Eigen::Index k = 0; k < h; k += kChunk) {
+      const Eigen::Index c = std::min(kChunk, h - k);
+      cyx.noalias() += pair_difference.middleCols(k, c) * half_deviation_.middleCols(k, c).transpose();
+    }
+  } else if (positive_weights_) {
+    scale_columns_by_sqrt_weights(y_dev);
+    rank_update_lower(cyy, y_dev);
+    x_dev_ = x_dev_ * sqrt_weights_.asDiagonal();
+    cyx.noalias() = y_dev * x_dev_.transpose();
+  } else {
+    cyy.template triangularView<Eigen::Lower>() += y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
+    cyx.noalias() = y_dev * samples_.weights.asDiagonal() * x_dev_.transpose();
+  }
+}
+
+template <int Dim>
+Eigen::Index SmartSamplingKalmanFilter<Dim>::reject_outlying_blocks(const Eigen::VectorXd& y,
+                                                                    const UpdateOptions& options) {
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
+  using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxBlock, 1>;
+  const Eigen::Index mo = observed_count_, b = options.block_size;
+  if (b > kMaxBlock) throw DimensionError("update: blocks of more than 6 components cannot be gated");
+  // The quantile for as many degrees of freedom as a block has observed components (a bisection
+  // that costs more than the gate itself: computed when the probability changes).
+  if (block_limit_probability_ != options.block_gate_probability) {
+    for (int d = 1; d <= kMaxBlock; ++d)
+      block_limit_[d] = chi_square_quantile(options.block_gate_probability, static_cast<double>(d));
+    block_limit_probability_ = options.block_gate_probability;
+  }
+  const double* limit = block_limit_;
+  Eigen::Index observed_blocks = 0;
+  for (Eigen::Index k = 0; k < mo;) {
+    const Eigen::Index block = index_(k) / b;
+    Eigen::Index end = k;
+    while (end < mo && index_(end) / b == block) ++end;
+    const Eigen::Index d = end - k;
+    Small c(d, d);
+    SmallVector e(d);
+    for (Eigen::Index j = 0; j < d; ++j) {
+      e(j) = y(index_(k + j)) - y_mean_(k + j);
+      for (Eigen::Index i = j; i < d; ++i) c(i, j) = c(j, i) = cyy_(k + i, k + j);
+    }
+    const Eigen::LLT<Small> llt(c);
+    if (llt.info() == Eigen::Success && e.dot(llt.solve(e)) > limit[d]) rejected_blocks_.push_back(block);
+    ++observed_blocks;
+    k = end;
+  }
+  if (rejected_blocks_.empty()) return mo;
+  if (2 * static_cast<Eigen::Index>(rejected_blocks_.size()) > observed_blocks) {
+    rejected_blocks_.clear();
+    return mo;
+  }
+  // The positions (in the observed rows) that stay, in order.
+  Eigen::Index kept = 0;
+  std::size_t next_rejected = 0;
+  for (Eigen::Index k = 0; k < mo; ++k) {
+    const Eigen::Index block = index_(k) / b;
+    while (next_rejected < rejected_blocks_.size() && rejected_blocks_[next_rejected] < block)
+      ++next_rejected;
+    if (next_rejected < rejected_blocks_.size() && rejected_blocks_[next_rejected] == block) continue;
+    kept_(kept++) = k;
+  }
+  // Compact in place: every source position is at or after its destination, and the columns
+  // (then rows) are written in ascending order, so nothing is read after it was overwritten.
+  for (Eigen::Index j = 0; j < kept; ++j) {
+    const Eigen::Index from_j = kept_(j);
+    for (Eigen::Index i = j; i < kept; ++i) cyy_(i, j) = cyy_(kept_(i), from_j);
+  }
+  for (Eigen::Index c = 0; c < cyx_.cols(); ++c)
+    for (Eigen::Index i = 0; i < kept; ++i) cyx_(i, c) = cyx_(kept_(i), c);
+  for (Eigen::Index i = 0; i < kept; ++i) {
+    index_(i) = index_(kept_(i));
+    y_mean_(i) = y_mean_(kept_(i));
+  }
+  observed_count_ = kept;
+  return kept;
+}
+
+template <int Dim>
+typename SmartSamplingKalmanFilter<Dim>::Iteration SmartSamplingKalmanFilter<Dim>::begin_iteration(
+    const State& state, const Eigen::VectorXd& y, const Eigen::MatrixXd& r) const {
+  const Eigen::Index mo = observed_count_;
+  Iteration iteration;
+  iteration.y_observed.resize(mo);
+  iteration.r_observed.resize(mo, mo);
+  for (Eigen::Index i = 0; i < mo; ++i) {
+    iteration.y_observed(i) = y(index_(i));
+    for (Eigen::Index j = 0; j < mo; ++j) iteration.r_observed(i, j) = r(index_(i), index_(j));
+  }
+  iteration.mean = state.mean;
+  iteration.covariance = state.covariance;
+  return iteration;
+}
+
+template <int Dim>
+FilterStatus SmartSamplingKalmanFilter<Dim>::iteration_pass(const State& state, Iteration& iteration,
+                                                            double& nis) {
+  const Eigen::Index mo = observed_count_;
+  const Eigen::MatrixXd y_dev = y_dev_.topRows(mo);
+  const Eigen::MatrixXd pyy = y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
+  const Eigen::MatrixXd pxy = x_dev_ * samples_.weights.asDiagonal() * y_dev.transpose();
+  // H = Pxy^T C_i^-1 via the Cholesky factor of C_i already in factor_.
+  const Eigen::MatrixXd h_lin = factor_.solve(pxy).transpose();
+  const Eigen::MatrixXd omega = pyy - h_lin * iteration.covariance * h_lin.transpose();
+  const Eigen::VectorXd offset = y_mean_.head(mo) - h_lin * iteration.mean;
+  Eigen::MatrixXd s = h_lin * state.covariance * h_lin.transpose() + iteration.r_observed + omega;
+  symmetrize(s);
+  Eigen::LLT<Eigen::MatrixXd> llt(s);
+  if (llt.info() != Eigen::Success) return FilterStatus::innovation_not_positive_definite;
+  const Eigen::VectorXd innovation = iteration.y_observed - h_lin * state.mean - offset;
+  const Eigen::MatrixXd gain_t = llt.solve(h_lin * state.covariance);  // K^T = S^-1 H C
+  nis = innovation.dot(llt.solve(innovation));
+  iteration.mean = state.mean + gain_t.transpose() * innovation;
+  iteration.covariance = state.covariance - gain_t.transpose() * s * gain_t;
+  symmetrize(iteration.covariance);
+  return FilterStatus::ok;
+}
+
+template <int Dim>
+UpdateResult SmartSamplingKalmanFilter<Dim>::finish_iteration(State& state, const Iteration& iteration,
+                                                              const UpdateOptions& options,
+                                                              UpdateResult result) const {
+  if (gated(result.nis, observed_count_, options)) {
+    result.status = FilterStatus::gated;
+    return result;
+  }
+  if (Eigen::LLT<Eigen::MatrixXd>(iteration.covariance).info() != Eigen::Success) {
+    result.status = FilterStatus::posterior_not_positive_definite;
+    return result;
+  }
+  state.mean = iteration.mean;
+  state.covariance = iteration.covariance;
+  return result;
+}
+
 using S2kf = SmartSamplingKalmanFilter<Eigen::Dynamic>;
+
+// A program that links the compiled library takes the dynamic-size filter's own functions (all but
+// the model-typed predict() and update() above) from it; the library's one source file emits them.
+#if !S2KF_DEFINE_HEAVY
+extern template class SmartSamplingKalmanFilter<Eigen::Dynamic>;
+#endif
 
 }  // namespace s2kf
