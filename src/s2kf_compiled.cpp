@@ -4,6 +4,3 @@
 #define S2KF_BUILDING_COMPILED
 #include <s2kf/s2kf.hpp>
 
-// The dynamic-size filter's own functions (the tracker's and most users' filter); the model-typed
-// predict() and update() stay with their callers (smart_sampling_kalman_filter.hpp).
-template class s2kf::SmartSamplingKalmanFilter<Eigen::Dynamic>;

@@ -209,6 +209,23 @@ TEST(S2kfLinear, SampleBasedPredictionOfALinearModelEqualsClosedForm) {
   EXPECT_LT(relative_error(s.covariance, expected.covariance), 1e-12);
 }
 
+TEST(S2kfLinear, FixedSizeStateGivesTheSameResultAsDynamic) {
+  std::mt19937_64 rng(4);
+  s2kf::SmartSamplingKalmanFilter<2> fixed_filter(s2kf::ukf_sample_set(2));
+  S2kf dynamic_filter(s2kf::ukf_sample_set(2));
+  const Eigen::Matrix2d c = random_spd(2, rng);
+  s2kf::Gaussian<double, 2> fixed(Eigen::Vector2d(1, 2), c);
+  GaussianXd dynamic(Eigen::VectorXd(fixed.mean), Eigen::MatrixXd(c));
+  LinearModel model{random_matrix(1, 2, rng), Eigen::VectorXd::Zero(1)};
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Constant(1, 1, 0.3);
+  const Eigen::VectorXd y = Eigen::VectorXd::Constant(1, 0.7);
+  ASSERT_TRUE(fixed_filter.update(fixed, model, y, r).ok());
+  ASSERT_TRUE(dynamic_filter.update(dynamic, model, y, r).ok());
+  EXPECT_LT((fixed.mean - dynamic.mean).norm(), 1e-14);
+  EXPECT_LT((fixed.covariance - dynamic.covariance).norm(), 1e-14);
+  EXPECT_THROW(s2kf::SmartSamplingKalmanFilter<3>(s2kf::ukf_sample_set(2)), s2kf::DimensionError);
+}
+
 TEST(S2kfLinear, NisIsTheNormalisedInnovationSquared) {
   S2kf filter(s2kf::ukf_sample_set(2));
   GaussianXd s(Eigen::Vector2d(0, 0), Eigen::Matrix2d::Identity());

@@ -58,82 +58,24 @@ struct UpdateResult {
   bool ok() const { return status == FilterStatus::ok; }
 };
 
-/// A measurement model is any callable `h(const Eigen::MatrixXd& states, Eigen::MatrixXd& out)`
-/// that maps a block of state samples (state dimension x L, one sample per column) to the block of
-/// predicted measurements (measurement dimension x L; `out` arrives sized). A system model has the
-/// same shape with the state dimension on both sides. Evaluating all samples in one call lets a
-/// model vectorise across samples.
-///
-/// The filter owns scratch buffers, so after the first step with the largest sizes, update() and
-/// predict() do not allocate (for the non-iterated update with positive weights).
-template <int Dim = Eigen::Dynamic>
-class SmartSamplingKalmanFilter {
- public:
-  using State = Gaussian<double, Dim>;
+namespace detail {
 
-  explicit SmartSamplingKalmanFilter(SampleSet samples) : samples_(std::move(samples)) {
-    if (samples_.count() < 1 || samples_.dimension() < 1 || samples_.weights.size() != samples_.count())
-      throw DimensionError("SmartSamplingKalmanFilter: the sample set is empty or its weights do not match");
-    if (Dim != Eigen::Dynamic && samples_.dimension() != Dim)
-      throw DimensionError("SmartSamplingKalmanFilter: sample dimension " +
-                           std::to_string(samples_.dimension()) + " differs from the state dimension " +
-                           std::to_string(Dim));
-    positive_weights_ = (samples_.weights.array() > 0).all();
-    sqrt_weights_ = samples_.weights.array().abs().sqrt().matrix();
-    detect_symmetry();
-  }
+/// The filter's arithmetic, for every state dimension and every model: the checks, drawing the
+/// samples, gathering the model's predictions, the moments, the outlier gate, the square-root gain
+/// and the update, the prediction's moments and the iterated update's passes. None of it depends on
+/// the model's type or on a state dimension fixed at compile time, so it is one class, compiled once
+/// (in the compiled library, or once per file header-only); SmartSamplingKalmanFilter adds the
+/// model's evaluation and the state's type.
+class FilterCore {
+ public:
+  explicit FilterCore(SampleSet samples);
 
   const SampleSet& samples() const { return samples_; }
 
   /// The blocks (component index / block size) the last update left out as outlying.
   const std::vector<Eigen::Index>& rejected_blocks() const { return rejected_blocks_; }
 
-  /// Closed-form linear prediction x <- A x + w, w ~ N(0, Q).
-  FilterStatus predict_linear(State& state, const Eigen::MatrixXd& a, const Eigen::MatrixXd& q) const;
-
-  /// Random walk x <- x + w, w ~ N(0, Q): only the covariance grows.
-  FilterStatus predict_random_walk(State& state, const Eigen::MatrixXd& q) const {
-    check_square(q, state.dimension(), "predict_random_walk: Q");
-    state.covariance += q;
-    return FilterStatus::ok;
-  }
-
-  /// Sample-based prediction through a nonlinear system model f (block form, see above):
-  /// m <- sum w_i f(x_i), C <- sum w_i (f(x_i) - m)(f(x_i) - m)^T + Q.
-  template <typename SystemModel>
-  FilterStatus predict(State& state, SystemModel&& f, const Eigen::MatrixXd& q) {
-    check_square(q, state.dimension(), "predict: Q");
-    if (const FilterStatus s = draw_samples(state.mean, state.covariance); s != FilterStatus::ok) return s;
-    propagated_.resize(state.dimension(), samples_.count());
-    f(static_cast<const Eigen::MatrixXd&>(x_), propagated_);
-    return finish_predict(state, q);
-  }
-
-  /// Measurement update y = h(x) + v, v ~ N(0, R), with every component observed.
-  template <typename MeasurementModel>
-  UpdateResult update(State& state, MeasurementModel&& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
-                      const UpdateOptions& options = {}) {
-    return update(state, std::forward<MeasurementModel>(h), y, r, ObservedMask::Constant(y.size(), true),
-                  options);
-  }
-
-  /// Measurement update with a mask of observed components. On any status but ok the state is
-  /// left exactly as it was.
-  template <typename MeasurementModel>
-  UpdateResult update(State& state, MeasurementModel&& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
-                      const ObservedMask& observed, const UpdateOptions& options = {}) {
-    // Only the model's evaluation depends on the model's type; everything around it (the checks,
-    // the samples, the moments, the gain and the update) is compiled once per state dimension, so
-    // a new model costs its own code and not another copy of the filter.
-    UpdateResult result = begin_update(state, y, r, observed, options);
-    if (!result.ok()) return result;
-    if (options.iterations > 1) return iterated_update(state, h, y, r, options, result);
-    if ((result.status = draw_samples(state.mean, state.covariance)) != FilterStatus::ok) return result;
-    if ((result.status = evaluate_observed(h, y.size())) != FilterStatus::ok) return result;
-    return finish_update(state, y, r, options, result);
-  }
-
- private:
+ protected:
   static void check_square(const Eigen::MatrixXd& a, Eigen::Index n, const char* what) {
     if (a.rows() != n || a.cols() != n)
       throw DimensionError(std::string(what) + " is " + std::to_string(a.rows()) + "x" +
@@ -160,15 +102,17 @@ class SmartSamplingKalmanFilter {
   }
 
   /// The checks of update() and the observed components; a status other than ok ends the update.
-  UpdateResult begin_update(const State& state, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+  UpdateResult begin_update(Eigen::Index state_dimension, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
                             const ObservedMask& observed, const UpdateOptions& options);
 
   /// After the model's evaluation: the moments, the square-root gain and the update of `state`.
-  UpdateResult finish_update(State& state, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
-                             const UpdateOptions& options, UpdateResult result);
+  UpdateResult finish_update(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
+                             const Eigen::VectorXd& y, const Eigen::MatrixXd& r, const UpdateOptions& options,
+                             UpdateResult result);
 
   /// After the system model's evaluation (in propagated_): the predicted mean and covariance.
-  FilterStatus finish_predict(State& state, const Eigen::MatrixXd& q);
+  FilterStatus finish_predict(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
+                              const Eigen::MatrixXd& q);
 
   /// x_i = m + S z_i with S the lower Cholesky factor of C; keeps the deviations S z_i in x_dev_.
   FilterStatus draw_samples(const Eigen::Ref<const Eigen::VectorXd>& mean,
@@ -204,14 +148,6 @@ class SmartSamplingKalmanFilter {
       block *= sqrt_weights_(0);
     else
       block = block * sqrt_weights_.asDiagonal();
-  }
-
-  /// Runs h on the current samples, keeps the observed rows as deviations from their weighted mean.
-  template <typename MeasurementModel>
-  FilterStatus evaluate_observed(MeasurementModel& h, Eigen::Index m) {
-    Eigen::MatrixXd& predictions = prepare_predictions(m);
-    h(static_cast<const Eigen::MatrixXd&>(x_), predictions);
-    return gather_observed(m);
   }
 
   /// Sizes the buffers for m predicted components and returns the one the model writes into: with
@@ -260,30 +196,20 @@ class SmartSamplingKalmanFilter {
     Eigen::MatrixXd covariance;
   };
 
-  /// Posterior linearisation: fit y ~ H x + b (residual covariance Omega) at the current posterior,
-  /// update the prior with that linear model, repeat.
-  template <typename MeasurementModel>
-  UpdateResult iterated_update(State& state, MeasurementModel& h, const Eigen::VectorXd& y,
-                               const Eigen::MatrixXd& r, const UpdateOptions& options, UpdateResult result) {
-    Iteration iteration = begin_iteration(state, y, r);
-    keep_full_deviations_ = true;  // this rarely used path works on all deviations
-    struct Restore {
-      bool& flag;
-      ~Restore() { flag = false; }
-    } restore{keep_full_deviations_};
-    for (int pass = 0; pass < options.iterations; ++pass) {
-      if ((result.status = draw_samples(iteration.mean, iteration.covariance)) != FilterStatus::ok)
-        return result;
-      if ((result.status = evaluate_observed(h, y.size())) != FilterStatus::ok) return result;
-      if ((result.status = iteration_pass(state, iteration, result.nis)) != FilterStatus::ok) return result;
-    }
-    return finish_iteration(state, iteration, options, result);
-  }
-  Iteration begin_iteration(const State& state, const Eigen::VectorXd& y, const Eigen::MatrixXd& r) const;
+  Iteration begin_iteration(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                            const Eigen::Ref<const Eigen::MatrixXd>& covariance, const Eigen::VectorXd& y,
+                            const Eigen::MatrixXd& r) const;
   /// One pass on the samples just evaluated; sets the NIS of the linearised update.
-  FilterStatus iteration_pass(const State& state, Iteration& iteration, double& nis);
-  UpdateResult finish_iteration(State& state, const Iteration& iteration, const UpdateOptions& options,
+  FilterStatus iteration_pass(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                              const Eigen::Ref<const Eigen::MatrixXd>& covariance, Iteration& iteration,
+                              double& nis);
+  UpdateResult finish_iteration(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
+                                const Iteration& iteration, const UpdateOptions& options,
                                 UpdateResult result) const;
+
+  /// Closed-form linear prediction (SmartSamplingKalmanFilter::predict_linear).
+  FilterStatus linear_prediction(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
+                                 const Eigen::MatrixXd& a, const Eigen::MatrixXd& q) const;
 
   SampleSet samples_;
   bool positive_weights_ = true;
@@ -309,40 +235,154 @@ class SmartSamplingKalmanFilter {
   double block_limit_[kMaxBlock + 1] = {};  ///< chi-square quantiles by degrees of freedom
 };
 
+}  // namespace detail
+
+/// A measurement model is any callable `h(const Eigen::MatrixXd& states, Eigen::MatrixXd& out)`
+/// that maps a block of state samples (state dimension x L, one sample per column) to the block of
+/// predicted measurements (measurement dimension x L; `out` arrives sized). A system model has the
+/// same shape with the state dimension on both sides. Evaluating all samples in one call lets a
+/// model vectorise across samples.
+///
+/// The filter owns scratch buffers, so after the first step with the largest sizes, update() and
+/// predict() do not allocate (for the non-iterated update with positive weights).
+template <int Dim = Eigen::Dynamic>
+class SmartSamplingKalmanFilter : public detail::FilterCore {
+ public:
+  using State = Gaussian<double, Dim>;
+
+  explicit SmartSamplingKalmanFilter(SampleSet samples) : detail::FilterCore(std::move(samples)) {
+    if (Dim != Eigen::Dynamic && samples_.dimension() != Dim)
+      throw DimensionError("SmartSamplingKalmanFilter: sample dimension " +
+                           std::to_string(samples_.dimension()) + " differs from the state dimension " +
+                           std::to_string(Dim));
+  }
+
+  /// Closed-form linear prediction x <- A x + w, w ~ N(0, Q).
+  FilterStatus predict_linear(State& state, const Eigen::MatrixXd& a, const Eigen::MatrixXd& q) const {
+    return linear_prediction(state.mean, state.covariance, a, q);
+  }
+
+  /// Random walk x <- x + w, w ~ N(0, Q): only the covariance grows.
+  FilterStatus predict_random_walk(State& state, const Eigen::MatrixXd& q) const {
+    check_square(q, state.dimension(), "predict_random_walk: Q");
+    state.covariance += q;
+    return FilterStatus::ok;
+  }
+
+  /// Sample-based prediction through a nonlinear system model f (block form, see above):
+  /// m <- sum w_i f(x_i), C <- sum w_i (f(x_i) - m)(f(x_i) - m)^T + Q.
+  template <typename SystemModel>
+  FilterStatus predict(State& state, SystemModel&& f, const Eigen::MatrixXd& q) {
+    check_square(q, state.dimension(), "predict: Q");
+    if (const FilterStatus s = draw_samples(state.mean, state.covariance); s != FilterStatus::ok) return s;
+    propagated_.resize(state.dimension(), samples_.count());
+    f(static_cast<const Eigen::MatrixXd&>(x_), propagated_);
+    return finish_predict(state.mean, state.covariance, q);
+  }
+
+  /// Measurement update y = h(x) + v, v ~ N(0, R), with every component observed.
+  template <typename MeasurementModel>
+  UpdateResult update(State& state, MeasurementModel&& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                      const UpdateOptions& options = {}) {
+    return update(state, std::forward<MeasurementModel>(h), y, r, ObservedMask::Constant(y.size(), true),
+                  options);
+  }
+
+  /// Measurement update with a mask of observed components. On any status but ok the state is
+  /// left exactly as it was.
+  template <typename MeasurementModel>
+  UpdateResult update(State& state, MeasurementModel&& h, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                      const ObservedMask& observed, const UpdateOptions& options = {}) {
+    // Only the model's evaluation depends on the model's type; everything around it is
+    // detail::FilterCore, compiled once, so a new model costs its own code and not another copy
+    // of the filter.
+    UpdateResult result = begin_update(state.dimension(), y, r, observed, options);
+    if (!result.ok()) return result;
+    if (options.iterations > 1) return iterated_update(state, h, y, r, options, result);
+    if ((result.status = draw_samples(state.mean, state.covariance)) != FilterStatus::ok) return result;
+    if ((result.status = evaluate_observed(h, y.size())) != FilterStatus::ok) return result;
+    return finish_update(state.mean, state.covariance, y, r, options, result);
+  }
+
+ private:
+  /// Runs h on the current samples, keeps the observed rows as deviations from their weighted mean.
+  template <typename MeasurementModel>
+  FilterStatus evaluate_observed(MeasurementModel& h, Eigen::Index m) {
+    Eigen::MatrixXd& predictions = prepare_predictions(m);
+    h(static_cast<const Eigen::MatrixXd&>(x_), predictions);
+    return gather_observed(m);
+  }
+
+  /// Posterior linearisation: fit y ~ H x + b (residual covariance Omega) at the current posterior,
+  /// update the prior with that linear model, repeat.
+  template <typename MeasurementModel>
+  UpdateResult iterated_update(State& state, MeasurementModel& h, const Eigen::VectorXd& y,
+                               const Eigen::MatrixXd& r, const UpdateOptions& options, UpdateResult result) {
+    Iteration iteration = begin_iteration(state.mean, state.covariance, y, r);
+    keep_full_deviations_ = true;  // this rarely used path works on all deviations
+    struct Restore {
+      bool& flag;
+      ~Restore() { flag = false; }
+    } restore{keep_full_deviations_};
+    for (int pass = 0; pass < options.iterations; ++pass) {
+      if ((result.status = draw_samples(iteration.mean, iteration.covariance)) != FilterStatus::ok)
+        return result;
+      if ((result.status = evaluate_observed(h, y.size())) != FilterStatus::ok) return result;
+      if ((result.status = iteration_pass(state.mean, state.covariance, iteration, result.nis)) !=
+          FilterStatus::ok)
+        return result;
+    }
+    return finish_iteration(state.mean, state.covariance, iteration, options, result);
+  }
+};
+
+using S2kf = SmartSamplingKalmanFilter<Eigen::Dynamic>;
+
+#if S2KF_DEFINE_HEAVY
+namespace detail {
+
+S2KF_INLINE FilterCore::FilterCore(SampleSet samples) : samples_(std::move(samples)) {
+  if (samples_.count() < 1 || samples_.dimension() < 1 || samples_.weights.size() != samples_.count())
+    throw DimensionError("SmartSamplingKalmanFilter: the sample set is empty or its weights do not match");
+  positive_weights_ = (samples_.weights.array() > 0).all();
+  sqrt_weights_ = samples_.weights.array().abs().sqrt().matrix();
+  detect_symmetry();
+}
+
 // Out of the class, so that a program that links the compiled library (S2KF_COMPILED) takes
 // these from it for the dynamic-size filter instead of compiling them again (see the end).
 
-template <int Dim>
-FilterStatus SmartSamplingKalmanFilter<Dim>::predict_linear(State& state, const Eigen::MatrixXd& a,
-                                                            const Eigen::MatrixXd& q) const {
-  const Eigen::Index n = state.dimension();
+S2KF_INLINE FilterStatus FilterCore::linear_prediction(Eigen::Ref<Eigen::VectorXd> mean,
+                                                       Eigen::Ref<Eigen::MatrixXd> covariance,
+                                                       const Eigen::MatrixXd& a,
+                                                       const Eigen::MatrixXd& q) const {
+  const Eigen::Index n = mean.size();
   check_square(q, n, "predict_linear: Q");
   check_square(a, n, "predict_linear: A");
-  state.mean = (a * state.mean).eval();
-  state.covariance = (a * state.covariance * a.transpose() + q).eval();
-  symmetrize(state.covariance);
+  mean = (a * mean).eval();
+  covariance = (a * covariance * a.transpose() + q).eval();
+  symmetrize(covariance);
   return FilterStatus::ok;
 }
 
-template <int Dim>
-FilterStatus SmartSamplingKalmanFilter<Dim>::finish_predict(State& state, const Eigen::MatrixXd& q) {
+S2KF_INLINE FilterStatus FilterCore::finish_predict(Eigen::Ref<Eigen::VectorXd> state_mean,
+                                                    Eigen::Ref<Eigen::MatrixXd> state_covariance,
+                                                    const Eigen::MatrixXd& q) {
   if (!propagated_.allFinite()) return FilterStatus::non_finite_model_output;
   const Eigen::VectorXd mean = propagated_ * samples_.weights;
   propagated_.colwise() -= mean;
   Eigen::MatrixXd covariance = q;
   covariance.noalias() += propagated_ * samples_.weights.asDiagonal() * propagated_.transpose();
-  state.mean = mean;
-  state.covariance = covariance;
-  symmetrize(state.covariance);
+  state_mean = mean;
+  state_covariance = covariance;
+  symmetrize(state_covariance);
   return FilterStatus::ok;
 }
 
-template <int Dim>
-UpdateResult SmartSamplingKalmanFilter<Dim>::begin_update(const State& state, const Eigen::VectorXd& y,
-                                                          const Eigen::MatrixXd& r,
-                                                          const ObservedMask& observed,
-                                                          const UpdateOptions& options) {
-  const Eigen::Index n = state.dimension();
+S2KF_INLINE UpdateResult FilterCore::begin_update(Eigen::Index state_dimension, const Eigen::VectorXd& y,
+                                                  const Eigen::MatrixXd& r, const ObservedMask& observed,
+                                                  const UpdateOptions& options) {
+  const Eigen::Index n = state_dimension;
   const Eigen::Index m = y.size();
   if (samples_.dimension() != n)
     throw DimensionError("update: the state has dimension " + std::to_string(n) + " but the samples " +
@@ -372,12 +412,11 @@ UpdateResult SmartSamplingKalmanFilter<Dim>::begin_update(const State& state, co
   return result;
 }
 
-template <int Dim>
-UpdateResult SmartSamplingKalmanFilter<Dim>::finish_update(State& state, const Eigen::VectorXd& y,
-                                                           const Eigen::MatrixXd& r,
-                                                           const UpdateOptions& options,
-                                                           UpdateResult result) {
-  const Eigen::Index n = state.dimension();
+S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> mean,
+                                                   Eigen::Ref<Eigen::MatrixXd> covariance,
+                                                   const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                                                   const UpdateOptions& options, UpdateResult result) {
+  const Eigen::Index n = mean.size();
   const Eigen::Index mo = observed_count_;
 
   // Cyy = sum w (y_i - y^)(y_i - y^)^T + R_oo and Cyx = sum w (y_i - y^)(x_i - m)^T, using the
@@ -412,7 +451,7 @@ UpdateResult SmartSamplingKalmanFilter<Dim>::finish_update(State& state, const E
     return result;
   }
   // C+ = C - A A^T must stay positive definite; check on a copy before touching the state.
-  posterior_covariance_ = state.covariance;
+  posterior_covariance_ = covariance;
   posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(cyx_kept.transpose(), -1.0);
   posterior_covariance_.template triangularView<Eigen::StrictlyUpper>() =
       posterior_covariance_.transpose().template triangularView<Eigen::StrictlyUpper>();
@@ -421,14 +460,13 @@ UpdateResult SmartSamplingKalmanFilter<Dim>::finish_update(State& state, const E
     result.status = FilterStatus::posterior_not_positive_definite;
     return result;
   }
-  state.mean.noalias() += cyx_kept.transpose() * innovation;
-  state.covariance = posterior_covariance_;
+  mean.noalias() += cyx_kept.transpose() * innovation;
+  covariance = posterior_covariance_;
   return result;
 }
 
-template <int Dim>
-FilterStatus SmartSamplingKalmanFilter<Dim>::draw_samples(
-    const Eigen::Ref<const Eigen::VectorXd>& mean, const Eigen::Ref<const Eigen::MatrixXd>& covariance) {
+S2KF_INLINE FilterStatus FilterCore::draw_samples(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                                                  const Eigen::Ref<const Eigen::MatrixXd>& covariance) {
   if (samples_.dimension() != mean.size())
     throw DimensionError("the state has dimension " + std::to_string(mean.size()) + " but the samples " +
                          std::to_string(samples_.dimension()));
@@ -454,8 +492,7 @@ FilterStatus SmartSamplingKalmanFilter<Dim>::draw_samples(
   return FilterStatus::ok;
 }
 
-template <int Dim>
-void SmartSamplingKalmanFilter<Dim>::detect_symmetry() {
+S2KF_INLINE void FilterCore::detect_symmetry() {
   const Eigen::Index count = samples_.count();
   origin_count_ = count % 2;
   half_count_ = count / 2;
@@ -466,9 +503,8 @@ void SmartSamplingKalmanFilter<Dim>::detect_symmetry() {
   equal_weights_ = (samples_.weights.array() == samples_.weights(0)).all();
 }
 
-template <int Dim>
-void SmartSamplingKalmanFilter<Dim>::solve_lower_in_place(const Eigen::Ref<const Eigen::MatrixXd>& lower,
-                                                          Eigen::Ref<Eigen::MatrixXd> b) {
+S2KF_INLINE void FilterCore::solve_lower_in_place(const Eigen::Ref<const Eigen::MatrixXd>& lower,
+                                                  Eigen::Ref<Eigen::MatrixXd> b) {
   const Eigen::Index n = lower.rows();
   if (n <= kChunk) {
     lower.template triangularView<Eigen::Lower>().solveInPlace(b);
@@ -482,8 +518,7 @@ void SmartSamplingKalmanFilter<Dim>::solve_lower_in_place(const Eigen::Ref<const
   solve_lower_in_place(lower.bottomRightCorner(n - h, n - h), bottom);
 }
 
-template <int Dim>
-Eigen::MatrixXd& SmartSamplingKalmanFilter<Dim>::prepare_predictions(Eigen::Index m) {
+S2KF_INLINE Eigen::MatrixXd& FilterCore::prepare_predictions(Eigen::Index m) {
   const Eigen::Index mo = observed_count_;
   const Eigen::Index count = samples_.count();
   if (y_dev_.rows() < m || y_dev_.cols() != count)
@@ -495,8 +530,7 @@ Eigen::MatrixXd& SmartSamplingKalmanFilter<Dim>::prepare_predictions(Eigen::Inde
   return direct_ ? y_dev_ : predictions_;
 }
 
-template <int Dim>
-FilterStatus SmartSamplingKalmanFilter<Dim>::gather_observed(Eigen::Index m) {
+S2KF_INLINE FilterStatus FilterCore::gather_observed(Eigen::Index m) {
   const Eigen::Index mo = observed_count_;
   const Eigen::Index count = samples_.count();
   if (symmetric_ && (pair_difference_.rows() < m || pair_difference_.cols() != half_count_))
@@ -526,10 +560,8 @@ FilterStatus SmartSamplingKalmanFilter<Dim>::gather_observed(Eigen::Index m) {
   return FilterStatus::ok;
 }
 
-template <int Dim>
-void SmartSamplingKalmanFilter<Dim>::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& cyy,
-                                                        Eigen::Block<Eigen::MatrixXd>& cyx,
-                                                        bool single_precision) {
+S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& cyy,
+                                                Eigen::Block<Eigen::MatrixXd>& cyx, bool single_precision) {
   const Eigen::Index mo = observed_count_;
   auto y_dev = y_dev_.topRows(mo);
   if (symmetric_) {
@@ -581,9 +613,8 @@ void SmartSamplingKalmanFilter<Dim>::accumulate_moments(Eigen::Block<Eigen::Matr
   }
 }
 
-template <int Dim>
-Eigen::Index SmartSamplingKalmanFilter<Dim>::reject_outlying_blocks(const Eigen::VectorXd& y,
-                                                                    const UpdateOptions& options) {
+S2KF_INLINE Eigen::Index FilterCore::reject_outlying_blocks(const Eigen::VectorXd& y,
+                                                            const UpdateOptions& options) {
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
   using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxBlock, 1>;
   const Eigen::Index mo = observed_count_, b = options.block_size;
@@ -644,9 +675,9 @@ Eigen::Index SmartSamplingKalmanFilter<Dim>::reject_outlying_blocks(const Eigen:
   return kept;
 }
 
-template <int Dim>
-typename SmartSamplingKalmanFilter<Dim>::Iteration SmartSamplingKalmanFilter<Dim>::begin_iteration(
-    const State& state, const Eigen::VectorXd& y, const Eigen::MatrixXd& r) const {
+S2KF_INLINE FilterCore::Iteration FilterCore::begin_iteration(
+    const Eigen::Ref<const Eigen::VectorXd>& mean, const Eigen::Ref<const Eigen::MatrixXd>& covariance,
+    const Eigen::VectorXd& y, const Eigen::MatrixXd& r) const {
   const Eigen::Index mo = observed_count_;
   Iteration iteration;
   iteration.y_observed.resize(mo);
@@ -655,14 +686,14 @@ typename SmartSamplingKalmanFilter<Dim>::Iteration SmartSamplingKalmanFilter<Dim
     iteration.y_observed(i) = y(index_(i));
     for (Eigen::Index j = 0; j < mo; ++j) iteration.r_observed(i, j) = r(index_(i), index_(j));
   }
-  iteration.mean = state.mean;
-  iteration.covariance = state.covariance;
+  iteration.mean = mean;
+  iteration.covariance = covariance;
   return iteration;
 }
 
-template <int Dim>
-FilterStatus SmartSamplingKalmanFilter<Dim>::iteration_pass(const State& state, Iteration& iteration,
-                                                            double& nis) {
+S2KF_INLINE FilterStatus FilterCore::iteration_pass(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                                                    const Eigen::Ref<const Eigen::MatrixXd>& covariance,
+                                                    Iteration& iteration, double& nis) {
   const Eigen::Index mo = observed_count_;
   const Eigen::MatrixXd y_dev = y_dev_.topRows(mo);
   const Eigen::MatrixXd pyy = y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
@@ -671,23 +702,24 @@ FilterStatus SmartSamplingKalmanFilter<Dim>::iteration_pass(const State& state, 
   const Eigen::MatrixXd h_lin = factor_.solve(pxy).transpose();
   const Eigen::MatrixXd omega = pyy - h_lin * iteration.covariance * h_lin.transpose();
   const Eigen::VectorXd offset = y_mean_.head(mo) - h_lin * iteration.mean;
-  Eigen::MatrixXd s = h_lin * state.covariance * h_lin.transpose() + iteration.r_observed + omega;
+  Eigen::MatrixXd s = h_lin * covariance * h_lin.transpose() + iteration.r_observed + omega;
   symmetrize(s);
   Eigen::LLT<Eigen::MatrixXd> llt(s);
   if (llt.info() != Eigen::Success) return FilterStatus::innovation_not_positive_definite;
-  const Eigen::VectorXd innovation = iteration.y_observed - h_lin * state.mean - offset;
-  const Eigen::MatrixXd gain_t = llt.solve(h_lin * state.covariance);  // K^T = S^-1 H C
+  const Eigen::VectorXd innovation = iteration.y_observed - h_lin * mean - offset;
+  const Eigen::MatrixXd gain_t = llt.solve(h_lin * covariance);  // K^T = S^-1 H C
   nis = innovation.dot(llt.solve(innovation));
-  iteration.mean = state.mean + gain_t.transpose() * innovation;
-  iteration.covariance = state.covariance - gain_t.transpose() * s * gain_t;
+  iteration.mean = mean + gain_t.transpose() * innovation;
+  iteration.covariance = covariance - gain_t.transpose() * s * gain_t;
   symmetrize(iteration.covariance);
   return FilterStatus::ok;
 }
 
-template <int Dim>
-UpdateResult SmartSamplingKalmanFilter<Dim>::finish_iteration(State& state, const Iteration& iteration,
-                                                              const UpdateOptions& options,
-                                                              UpdateResult result) const {
+S2KF_INLINE UpdateResult FilterCore::finish_iteration(Eigen::Ref<Eigen::VectorXd> mean,
+                                                      Eigen::Ref<Eigen::MatrixXd> covariance,
+                                                      const Iteration& iteration,
+                                                      const UpdateOptions& options,
+                                                      UpdateResult result) const {
   if (gated(result.nis, observed_count_, options)) {
     result.status = FilterStatus::gated;
     return result;
@@ -696,17 +728,12 @@ UpdateResult SmartSamplingKalmanFilter<Dim>::finish_iteration(State& state, cons
     result.status = FilterStatus::posterior_not_positive_definite;
     return result;
   }
-  state.mean = iteration.mean;
-  state.covariance = iteration.covariance;
+  mean = iteration.mean;
+  covariance = iteration.covariance;
   return result;
 }
 
-using S2kf = SmartSamplingKalmanFilter<Eigen::Dynamic>;
-
-// A program that links the compiled library takes the dynamic-size filter's own functions (all but
-// the model-typed predict() and update() above) from it; the library's one source file emits them.
-#if !S2KF_DEFINE_HEAVY
-extern template class SmartSamplingKalmanFilter<Eigen::Dynamic>;
+}  // namespace detail
 #endif
 
 }  // namespace s2kf
