@@ -3,4 +3,3 @@
 // declarations; here every definition is emitted once (include/s2kf/core/compilation_mode.hpp).
 #define S2KF_BUILDING_COMPILED
 #include <s2kf/s2kf.hpp>
-
