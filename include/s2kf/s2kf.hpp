@@ -62,6 +62,7 @@
 #include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/marker_set_inference.hpp>
 #include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/track/nearest_point_tree.hpp>
 #include <s2kf/track/rigid_clusters.hpp>
 #include <s2kf/track/rigid_fit.hpp>
 #include <s2kf/track/segment_observation.hpp>

@@ -40,6 +40,7 @@
 // Only the definitions below track recordings; a file that links the compiled library sees the
 // declaration and does not parse the session and the tracker for it (compilation_mode.hpp).
 #if S2KF_DEFINE_HEAVY
+#include <s2kf/track/nearest_point_tree.hpp>
 #include <s2kf/track/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #endif
@@ -193,7 +194,10 @@ inline void match_template(const body::BodyModel& base, const std::vector<Templa
   const body::FrameTransforms frames =
       body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), fit.joints);
   const Eigen::Matrix3d rotation = lab_from_model(up, fit.heading);
-  Eigen::Matrix3Xd placed(3, static_cast<Eigen::Index>(candidates.size()));
+  // One row per coordinate, so that the distances to every template point are computed a vector
+  // of points at a time: this search is nearly all of the inference's time.
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> placed(
+      3, static_cast<Eigen::Index>(candidates.size()));
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const auto k = static_cast<std::size_t>(candidates[c].frame);
     placed.col(static_cast<Eigen::Index>(c)) =
@@ -201,14 +205,18 @@ inline void match_template(const body::BodyModel& base, const std::vector<Templa
   }
   fit.nearest.assign(static_cast<std::size_t>(lab.cols()), 0);
   fit.residual_mm.assign(static_cast<std::size_t>(lab.cols()), 0.0);
+  Eigen::Array<double, 1, Eigen::Dynamic> squared_distance(placed.cols());
   for (int step = 0; step < steps; ++step) {
     double cost = 0;
     Eigen::Vector3d shift = Eigen::Vector3d::Zero();
     int inliers = 0;
     for (Eigen::Index i = 0; i < lab.cols(); ++i) {
+      const Eigen::Vector3d marker = lab.col(i) - fit.translation;
+      squared_distance = (placed.row(0).array() - marker.x()).square() +
+                         (placed.row(1).array() - marker.y()).square() +
+                         (placed.row(2).array() - marker.z()).square();
       Eigen::Index nearest = 0;
-      const double d2 =
-          (placed.colwise() - (lab.col(i) - fit.translation)).colwise().squaredNorm().minCoeff(&nearest);
+      const double d2 = squared_distance.minCoeff(&nearest);
       fit.nearest[static_cast<std::size_t>(i)] = static_cast<int>(nearest);
       fit.residual_mm[static_cast<std::size_t>(i)] = std::sqrt(d2);
       cost += std::min(d2, kTemplateCap * kTemplateCap);
@@ -258,29 +266,62 @@ inline TemplateFit fit_template(const body::BodyModel& base, const std::vector<T
                                 const Eigen::Matrix3Xd& lab, int up, double refine_above_rms_mm) {
   constexpr int kHeadings = 36;
   std::vector<TemplateFit> best_by_heading(kHeadings);
-  for (const double abduction : {0.0, 0.4, 0.8, 1.2, 1.57})
+  std::vector<Eigen::Vector3d> start_by_heading(kHeadings, Eigen::Vector3d::Zero());
+  for (const double abduction : {0.0, 0.4, 0.8, 1.2, 1.57}) {
+    const Eigen::VectorXd joints = arms_out(base, abduction);
+    const body::FrameTransforms frames =
+        body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), joints);
+    // The template points of the 1000 mm model in this pose, in its own frame. A trial placement
+    // turns and scales them; the nearest point to a marker is found by taking the marker back
+    // into this frame instead, in a tree built once per pose.
+    Eigen::Matrix3Xd model_points(3, static_cast<Eigen::Index>(candidates.size()));
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      const auto k = static_cast<std::size_t>(candidates[c].frame);
+      model_points.col(static_cast<Eigen::Index>(c)) =
+          frames.origins[k] + frames.rotations[k] * candidates[c].offset;
+    }
+    const NearestPointTree tree(model_points);
     for (double height = 1300; height <= 2100; height += 50)
       for (int h = 0; h < kHeadings; ++h) {
         TemplateFit fit;
-        fit.height = height, fit.heading = 2 * kPi * h / kHeadings, fit.joints = arms_out(base, abduction);
-        // Start at the markers' centroid, feet on the lowest marker; match_template shifts it.
-        const body::FrameTransforms frames =
-            body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), fit.joints);
-        Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        fit.height = height, fit.heading = 2 * kPi * h / kHeadings;
         const Eigen::Matrix3d rotation = lab_from_model(up, fit.heading);
-        for (const TemplatePoint& c : candidates) {
-          const auto k = static_cast<std::size_t>(c.frame);
-          const Eigen::Vector3d p =
-              rotation * (frames.origins[k] + frames.rotations[k] * c.offset) * (height / 1000.0);
-          sum += p, low = low.cwiseMin(p);
+        const Eigen::Matrix3Xd placed = rotation * model_points * (height / 1000.0);
+        // Start at the markers' centroid, feet on the lowest marker; the matching steps shift it.
+        fit.translation = lab.rowwise().mean() - placed.rowwise().mean();
+        fit.translation(up) = lab.row(up).minCoeff() - placed.row(up).minCoeff();
+        const Eigen::Vector3d start = fit.translation;
+        const double scale = height / 1000.0, cap_in_model = kTemplateCap / scale;
+        for (int step = 0; step < 4; ++step) {
+          double cost = 0;
+          Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+          int inliers = 0;
+          for (Eigen::Index i = 0; i < lab.cols(); ++i) {
+            const Eigen::Vector3d marker = lab.col(i) - fit.translation;
+            const NearestPointTree::Hit hit =
+                tree.nearest(rotation.transpose() * marker / scale, cap_in_model * cap_in_model);
+            const double d2 =
+                hit.index < 0 ? kTemplateCap * kTemplateCap : (placed.col(hit.index) - marker).squaredNorm();
+            cost += std::min(d2, kTemplateCap * kTemplateCap);
+            if (d2 < kTemplateCap * kTemplateCap) shift += marker - placed.col(hit.index), ++inliers;
+          }
+          fit.cost = cost;
+          if (step + 1 < 4 && inliers > 0) fit.translation += shift / inliers;
         }
-        fit.translation = lab.rowwise().mean() - sum / static_cast<double>(candidates.size());
-        fit.translation(up) = lab.row(up).minCoeff() - low(up);
-        match_template(base, candidates, lab, up, 4, fit);
-        if (fit.cost < best_by_heading[static_cast<std::size_t>(h)].cost)
-          best_by_heading[static_cast<std::size_t>(h)] = fit;
+        if (fit.cost < best_by_heading[static_cast<std::size_t>(h)].cost) {
+          fit.joints = joints;
+          best_by_heading[static_cast<std::size_t>(h)] = std::move(fit);
+          start_by_heading[static_cast<std::size_t>(h)] = start;
+        }
       }
+  }
+  // Each direction's best placement again, by comparing every marker with every point: the
+  // nearest point of the markers beyond the cap, too.
+  for (int h = 0; h < kHeadings; ++h) {
+    TemplateFit& fit = best_by_heading[static_cast<std::size_t>(h)];
+    fit.translation = start_by_heading[static_cast<std::size_t>(h)];
+    match_template(base, candidates, lab, up, 4, fit);
+  }
   // Refined: the best direction, the best more than 60 deg from it and the best more than 120 deg
   // from it (facing backwards); the margin compares refined fits only.
   const auto apart = [](double a, double b) { return std::abs(std::remainder(a - b, 2 * kPi)); };
