@@ -6,10 +6,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=build
 # A clean build: every test program, the program and the Python module compile their files in
-# unity batches of 8, which share the parsing of Eigen, GoogleTest and the library's headers and
+# unity batches of 16, which share the parsing of Eigen, GoogleTest and the library's headers and
 # the template instantiations those headers bring (docs/architecture.md, "Compile time"). A build
 # for editing one file at a time is quicker without: configure it yourself, as in the README.
-unity=(-DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=8)
+unity=(-DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=16)
 flags=(-DCMAKE_BUILD_TYPE=Release "${unity[@]}")
 skip=()
 # The C3D mutation test (C3dFuzz) runs for a bounded time: 5 s here, 20 s under the sanitizers,

@@ -42,7 +42,7 @@ const std::string kHandstand = std::string(S2KF_DATA_DIR) + "/handstand.c3d";
 const std::string kFastOptions = " --no-calibrate --samples 93 --quiet";
 
 /// The handstand's stored labels, in file order.
-std::vector<std::string> labels_of(const c3d::Recording& recording) {
+std::vector<std::string> stored_labels_of(const c3d::Recording& recording) {
   std::vector<std::string> labels;
   for (const c3d::PointLabel& label : recording.info.labels) labels.push_back(c3d::stored_label(label));
   return labels;
@@ -84,7 +84,7 @@ TEST(Faults, Latin1LabelsAreDecodedMatchedAndWrittenAsUtf8) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const std::string dir = scratch_directory("faults_latin1");
   c3d::Recording recording = c3d::read_c3d(kHandstand);
-  std::vector<std::string> labels = labels_of(recording);
+  std::vector<std::string> labels = stored_labels_of(recording);
   const auto c7 = std::find(labels.begin(), labels.end(), "C7");
   ASSERT_NE(c7, labels.end());
   *c7 = "C7\xC9";  // Latin-1 É, as a French lab's software stores it
@@ -186,7 +186,7 @@ TEST(Faults, MetresLabelledMillimetresAreRefusedWithOrWithoutHeight) {
   const std::string dir = scratch_directory("faults_metres");
   c3d::Recording recording = c3d::read_c3d(kHandstand);
   const std::string file = dir + "/metres.c3d";
-  c3d::write_c3d(file, labels_of(recording), recording.info.rate, recording.positions / 1000.0,
+  c3d::write_c3d(file, stored_labels_of(recording), recording.info.rate, recording.positions / 1000.0,
                  recording.visible);  // POINT:UNITS says mm
   for (const std::string& height : {std::string(), std::string(" --height 1750")}) {
     SCOPED_TRACE(height);
@@ -206,7 +206,7 @@ TEST(Faults, ImplausibleFrameRatesAreWarnedAboutAndRefused) {
   for (const double rate : {1e-40, 1e30, 0.5, 250000.0}) {
     SCOPED_TRACE(rate);
     const std::string file = dir + "/rate.c3d";
-    c3d::write_c3d(file, labels_of(recording), rate, positions, visible);
+    c3d::write_c3d(file, stored_labels_of(recording), rate, positions, visible);
     const test_support::CommandResult shown = run_command("c3d " + file);
     EXPECT_EQ(shown.status, 0) << shown.output;
     EXPECT_NE(shown.output.find("warning: the frame rate"), std::string::npos) << shown.output;
@@ -217,7 +217,7 @@ TEST(Faults, ImplausibleFrameRatesAreWarnedAboutAndRefused) {
   }
   // 0, NaN and negative rates: patched into the header and the RATE parameters of a 123.25 Hz file.
   const std::string file = dir + "/rate.c3d";
-  c3d::write_c3d(file, labels_of(recording), 123.25, positions, visible);
+  c3d::write_c3d(file, stored_labels_of(recording), 123.25, positions, visible);
   const std::string bytes = read_text_file(file);
   const std::size_t data_start =
       static_cast<std::size_t>(c3d::C3dReader(file).info().data_offset);  // the parameters end here

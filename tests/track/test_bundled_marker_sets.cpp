@@ -67,20 +67,20 @@ SetRecording simulate_with(const body::MarkerSet& set, std::uint64_t seed,
   return s;
 }
 
-struct Tracked {
+struct SetTracked {
   track::Session session;
   track::TrackingRun run;
   track::TruthComparison accuracy;
   std::vector<Eigen::VectorXd> last_uncertainty;  // segment_uncertainty_deg of the last frame
 };
 
-Tracked track_simulated(const SetRecording& s, const body::MarkerSet& set) {
+SetTracked track_simulated(const SetRecording& s, const body::MarkerSet& set) {
   SequenceFrameSource source(s.recording);
   track::SessionOptions options;
   options.tracker = track::preset_options("default", 100.0);
   options.calibration_frames = 400;
   const SampleSet& samples = test::tracker_samples(options.tracker);
-  Tracked t;
+  SetTracked t;
   t.session = track::prepare_session(source, set, options, samples);
   track::RunHooks hooks;
   io::MotionTable motion;
@@ -151,7 +151,7 @@ TEST(BundledMarkerSets, EachTracksASimulatedRecordingOfItsOwnMarkers) {
                            "qualisys_sports", "plugin_gait"}) {
     const body::MarkerSet set = cli::resolve_marker_set(name);
     const SetRecording s = simulate_with(set, 5);
-    const Tracked t = track_simulated(s, set);
+    const SetTracked t = track_simulated(s, set);
     EXPECT_EQ(t.session.markers_used(), static_cast<int>(set.entries.size())) << name;
     EXPECT_TRUE(t.session.segments.unobserved_joints.empty()) << name;
     std::cout << name << ": all-joint RMS " << t.accuracy.all_joint_rms_deg
@@ -170,7 +170,7 @@ TEST(PartialMarkerSets, LowerBodyRecordingWritesTheUpperBodyAsNotObserved) {
   // The automatic choice takes the lower-body set, not the full one it is half of.
   const std::vector<body::MarkerSet> sets{cli::resolve_marker_set("plugin_gait"), set};
   EXPECT_EQ(track::choose_marker_set(s.recording.labels, sets), 1);
-  const Tracked t = track_simulated(s, set);
+  const SetTracked t = track_simulated(s, set);
   EXPECT_EQ(t.session.segments.unobserved_segments(),
             (std::vector<std::string>{"BP", "BT", "BLN", "BUN", "LS", "LE", "LW", "RS", "RE", "RW"}));
   bool warned = false;
@@ -206,7 +206,7 @@ TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const body::MarkerSet set = cli::resolve_marker_set("plugin_gait_upper");
   const SetRecording s = simulate_with(set, 13);
-  const Tracked t = track_simulated(s, set);
+  const SetTracked t = track_simulated(s, set);
   EXPECT_EQ(t.session.segments.unobserved_segments(),
             (std::vector<std::string>{"LH", "LK", "LA", "RH", "RK", "RA"}));
   for (int j = 0; j < t.session.model.joint_count(); ++j) {
@@ -223,7 +223,7 @@ TEST(PartialMarkerSets, CountsFramesWithoutAVisibleMarkerPerSegment) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const body::MarkerSet set = cli::resolve_marker_set("plugin_gait_lower");
   const SetRecording s = simulate_with(set, 21, {sim::SegmentDropout{"LA", 1.0, 0.5}});
-  const Tracked t = track_simulated(s, set);
+  const SetTracked t = track_simulated(s, set);
   const track::SegmentObservation& seen = t.run.segments;
   EXPECT_EQ(seen.frames, 400);
   EXPECT_EQ(seen.frames_without_marker[static_cast<std::size_t>(seen.segment_index("LA"))], 50);

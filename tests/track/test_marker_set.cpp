@@ -22,7 +22,7 @@ namespace {
 using namespace s2kf;
 namespace fs = std::filesystem;
 
-std::vector<std::string> labels_of(const std::string& file) {
+std::vector<std::string> labels_in_file(const std::string& file) {
   c3d::C3dReader reader(std::string(S2KF_C3D_DATA_DIR) + "/" + file);
   std::vector<std::string> labels;
   for (const auto& label : reader.info().labels)
@@ -155,20 +155,20 @@ TEST(MarkerSet, WarnsAboutSegmentsWithOneMarker) {
 TEST(MarkerSet, AutomaticChoiceFitsTheLab) {
   const std::vector<body::MarkerSet> sets{cli::resolve_marker_set("kit"), cli::resolve_marker_set("cmu"),
                                           cli::resolve_marker_set("plugin_gait")};
-  EXPECT_EQ(track::choose_marker_set(labels_of("85_02.c3d"), sets), 1);
-  EXPECT_EQ(track::choose_marker_set(labels_of("HDM_mm_01-02_03_120.c3d"), sets), 1);
-  EXPECT_EQ(track::choose_marker_set(labels_of("PiG_Motion-FlatFoot-One.c3d"), sets), 2);
-  EXPECT_EQ(track::choose_marker_set(labels_of("test1.c3d"), sets), 2);
+  EXPECT_EQ(track::choose_marker_set(labels_in_file("85_02.c3d"), sets), 1);
+  EXPECT_EQ(track::choose_marker_set(labels_in_file("HDM_mm_01-02_03_120.c3d"), sets), 1);
+  EXPECT_EQ(track::choose_marker_set(labels_in_file("PiG_Motion-FlatFoot-One.c3d"), sets), 2);
+  EXPECT_EQ(track::choose_marker_set(labels_in_file("test1.c3d"), sets), 2);
   EXPECT_EQ(track::choose_marker_set(sets[0].labels(), sets), 0);
   EXPECT_EQ(track::choose_marker_set({"foo", "bar"}, sets), -1);
-  EXPECT_DOUBLE_EQ(body::marker_set_match(labels_of("85_02.c3d"), sets[1]), 1.0);
+  EXPECT_DOUBLE_EQ(body::marker_set_match(labels_in_file("85_02.c3d"), sets[1]), 1.0);
   // test1 labels the forearm LFRA: the alias maps it to LFRM.
-  const track::MarkerMapping mapping = track::map_marker_set(labels_of("test1.c3d"), sets[2]);
+  const track::MarkerMapping mapping = track::map_marker_set(labels_in_file("test1.c3d"), sets[2]);
   const std::vector<std::string> pig_labels = sets[2].labels();
   const auto lfrm = std::find(pig_labels.begin(), pig_labels.end(), "LFRM") - pig_labels.begin();
   ASSERT_GE(mapping.point_of_marker[static_cast<std::size_t>(lfrm)], 0);
   EXPECT_EQ(
-      labels_of(
+      labels_in_file(
           "test1.c3d")[static_cast<std::size_t>(mapping.point_of_marker[static_cast<std::size_t>(lfrm)])],
       "LFRA");
 }
