@@ -187,15 +187,42 @@ struct TemplateFit {
 /// point (a virtual point, a stray) must not pull the fit.
 inline constexpr double kTemplateCap = 150.0;
 
+/// The matching steps: in each, every marker's nearest placed template point (`nearest(marker)`,
+/// the marker relative to fit.translation: its index and squared distance; index -1 where none is
+/// within the cap), the capped cost, and the translation moved by the mean residual of the markers
+/// within the cap. Sets cost, translation, nearest and residual_mm (of the last step).
+template <class Placed, class Nearest>
+void match_steps(const Placed& placed, const Eigen::Matrix3Xd& lab, int steps, const Nearest& nearest,
+                 TemplateFit& fit) {
+  fit.nearest.assign(static_cast<std::size_t>(lab.cols()), -1);
+  fit.residual_mm.assign(static_cast<std::size_t>(lab.cols()), std::numeric_limits<double>::infinity());
+  for (int step = 0; step < steps; ++step) {
+    double cost = 0;
+    Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+    int inliers = 0;
+    for (Eigen::Index i = 0; i < lab.cols(); ++i) {
+      const NearestPointTree::Hit hit = nearest(Eigen::Vector3d(lab.col(i) - fit.translation));
+      fit.nearest[static_cast<std::size_t>(i)] = static_cast<int>(hit.index);
+      fit.residual_mm[static_cast<std::size_t>(i)] = std::sqrt(hit.squared_distance);
+      cost += std::min(hit.squared_distance, kTemplateCap * kTemplateCap);
+      if (hit.squared_distance < kTemplateCap * kTemplateCap)
+        shift += lab.col(i) - (placed.col(hit.index) + fit.translation), ++inliers;
+    }
+    fit.cost = cost;
+    if (step + 1 < steps && inliers > 0) fit.translation += shift / inliers;
+  }
+}
+
 /// The cost of `fit` (its height, heading, joints) with the translation refined by `steps`
-/// nearest-point matching steps from fit.translation; sets cost, translation, nearest, residual_mm.
+/// nearest-point matching steps from fit.translation, each marker compared with every template
+/// point; sets cost, translation, nearest, residual_mm.
 inline void match_template(const body::BodyModel& base, const std::vector<TemplatePoint>& candidates,
                            const Eigen::Matrix3Xd& lab, int up, int steps, TemplateFit& fit) {
   const body::FrameTransforms frames =
       body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), fit.joints);
   const Eigen::Matrix3d rotation = lab_from_model(up, fit.heading);
   // One row per coordinate, so that the distances to every template point are computed a vector
-  // of points at a time: this search is nearly all of the inference's time.
+  // of points at a time.
   Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> placed(
       3, static_cast<Eigen::Index>(candidates.size()));
   for (std::size_t c = 0; c < candidates.size(); ++c) {
@@ -203,29 +230,16 @@ inline void match_template(const body::BodyModel& base, const std::vector<Templa
     placed.col(static_cast<Eigen::Index>(c)) =
         rotation * (frames.origins[k] + frames.rotations[k] * candidates[c].offset) * (fit.height / 1000.0);
   }
-  fit.nearest.assign(static_cast<std::size_t>(lab.cols()), 0);
-  fit.residual_mm.assign(static_cast<std::size_t>(lab.cols()), 0.0);
   Eigen::Array<double, 1, Eigen::Dynamic> squared_distance(placed.cols());
-  for (int step = 0; step < steps; ++step) {
-    double cost = 0;
-    Eigen::Vector3d shift = Eigen::Vector3d::Zero();
-    int inliers = 0;
-    for (Eigen::Index i = 0; i < lab.cols(); ++i) {
-      const Eigen::Vector3d marker = lab.col(i) - fit.translation;
-      squared_distance = (placed.row(0).array() - marker.x()).square() +
-                         (placed.row(1).array() - marker.y()).square() +
-                         (placed.row(2).array() - marker.z()).square();
-      Eigen::Index nearest = 0;
-      const double d2 = squared_distance.minCoeff(&nearest);
-      fit.nearest[static_cast<std::size_t>(i)] = static_cast<int>(nearest);
-      fit.residual_mm[static_cast<std::size_t>(i)] = std::sqrt(d2);
-      cost += std::min(d2, kTemplateCap * kTemplateCap);
-      if (d2 < kTemplateCap * kTemplateCap)
-        shift += lab.col(i) - (placed.col(nearest) + fit.translation), ++inliers;
-    }
-    fit.cost = cost;
-    if (step + 1 < steps && inliers > 0) fit.translation += shift / inliers;
-  }
+  const auto scan = [&](const Eigen::Vector3d& marker) {
+    squared_distance = (placed.row(0).array() - marker.x()).square() +
+                       (placed.row(1).array() - marker.y()).square() +
+                       (placed.row(2).array() - marker.z()).square();
+    NearestPointTree::Hit hit;
+    hit.squared_distance = squared_distance.minCoeff(&hit.index);
+    return hit;
+  };
+  match_steps(placed, lab, steps, scan, fit);
 }
 
 /// Lets the pose vary where the markers ask for it: pattern search over the hips, knees,
@@ -292,22 +306,13 @@ inline TemplateFit fit_template(const body::BodyModel& base, const std::vector<T
         fit.translation(up) = lab.row(up).minCoeff() - placed.row(up).minCoeff();
         const Eigen::Vector3d start = fit.translation;
         const double scale = height / 1000.0, cap_in_model = kTemplateCap / scale;
-        for (int step = 0; step < 4; ++step) {
-          double cost = 0;
-          Eigen::Vector3d shift = Eigen::Vector3d::Zero();
-          int inliers = 0;
-          for (Eigen::Index i = 0; i < lab.cols(); ++i) {
-            const Eigen::Vector3d marker = lab.col(i) - fit.translation;
-            const NearestPointTree::Hit hit =
-                tree.nearest(rotation.transpose() * marker / scale, cap_in_model * cap_in_model);
-            const double d2 =
-                hit.index < 0 ? kTemplateCap * kTemplateCap : (placed.col(hit.index) - marker).squaredNorm();
-            cost += std::min(d2, kTemplateCap * kTemplateCap);
-            if (d2 < kTemplateCap * kTemplateCap) shift += marker - placed.col(hit.index), ++inliers;
-          }
-          fit.cost = cost;
-          if (step + 1 < 4 && inliers > 0) fit.translation += shift / inliers;
-        }
+        const auto search = [&](const Eigen::Vector3d& marker) {
+          NearestPointTree::Hit hit =
+              tree.nearest(rotation.transpose() * marker / scale, cap_in_model * cap_in_model);
+          if (hit.index >= 0) hit.squared_distance = (placed.col(hit.index) - marker).squaredNorm();
+          return hit;
+        };
+        match_steps(placed, lab, 4, search, fit);
         if (fit.cost < best_by_heading[static_cast<std::size_t>(h)].cost) {
           fit.joints = joints;
           best_by_heading[static_cast<std::size_t>(h)] = std::move(fit);
