@@ -183,6 +183,21 @@ struct TemplateFit {
   }
 };
 
+/// The template points of the 1000 mm model at `joints`, in the model's own frame (translation
+/// zero, not turned).
+inline Eigen::Matrix3Xd template_in_pose(const body::BodyModel& base,
+                                         const std::vector<TemplatePoint>& candidates,
+                                         const Eigen::VectorXd& joints) {
+  const body::FrameTransforms frames =
+      body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), joints);
+  Eigen::Matrix3Xd points(3, static_cast<Eigen::Index>(candidates.size()));
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    const auto k = static_cast<std::size_t>(candidates[c].frame);
+    points.col(static_cast<Eigen::Index>(c)) = frames.origins[k] + frames.rotations[k] * candidates[c].offset;
+  }
+  return points;
+}
+
 /// A residual counts at most this much in the template cost: a marker far from every template
 /// point (a virtual point, a stray) must not pull the fit.
 inline constexpr double kTemplateCap = 150.0;
@@ -218,18 +233,11 @@ void match_steps(const Placed& placed, const Eigen::Matrix3Xd& lab, int steps, c
 /// point; sets cost, translation, nearest, residual_mm.
 inline void match_template(const body::BodyModel& base, const std::vector<TemplatePoint>& candidates,
                            const Eigen::Matrix3Xd& lab, int up, int steps, TemplateFit& fit) {
-  const body::FrameTransforms frames =
-      body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), fit.joints);
-  const Eigen::Matrix3d rotation = lab_from_model(up, fit.heading);
   // One row per coordinate, so that the distances to every template point are computed a vector
   // of points at a time.
-  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> placed(
-      3, static_cast<Eigen::Index>(candidates.size()));
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    const auto k = static_cast<std::size_t>(candidates[c].frame);
-    placed.col(static_cast<Eigen::Index>(c)) =
-        rotation * (frames.origins[k] + frames.rotations[k] * candidates[c].offset) * (fit.height / 1000.0);
-  }
+  const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> placed =
+      lab_from_model(up, fit.heading) * template_in_pose(base, candidates, fit.joints) *
+      (fit.height / 1000.0);
   Eigen::Array<double, 1, Eigen::Dynamic> squared_distance(placed.cols());
   const auto scan = [&](const Eigen::Vector3d& marker) {
     squared_distance = (placed.row(0).array() - marker.x()).square() +
@@ -283,17 +291,9 @@ inline TemplateFit fit_template(const body::BodyModel& base, const std::vector<T
   std::vector<Eigen::Vector3d> start_by_heading(kHeadings, Eigen::Vector3d::Zero());
   for (const double abduction : {0.0, 0.4, 0.8, 1.2, 1.57}) {
     const Eigen::VectorXd joints = arms_out(base, abduction);
-    const body::FrameTransforms frames =
-        body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), joints);
-    // The template points of the 1000 mm model in this pose, in its own frame. A trial placement
-    // turns and scales them; the nearest point to a marker is found by taking the marker back
-    // into this frame instead, in a tree built once per pose.
-    Eigen::Matrix3Xd model_points(3, static_cast<Eigen::Index>(candidates.size()));
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      const auto k = static_cast<std::size_t>(candidates[c].frame);
-      model_points.col(static_cast<Eigen::Index>(c)) =
-          frames.origins[k] + frames.rotations[k] * candidates[c].offset;
-    }
+    // A trial placement turns and scales these; the nearest point to a marker is found by taking
+    // the marker back into the model's frame instead, in a tree built once per pose.
+    const Eigen::Matrix3Xd model_points = template_in_pose(base, candidates, joints);
     const NearestPointTree tree(model_points);
     for (double height = 1300; height <= 2100; height += 50)
       for (int h = 0; h < kHeadings; ++h) {
