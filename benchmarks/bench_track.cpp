@@ -41,16 +41,12 @@ void BM_TrackStep(benchmark::State& state) {
 }
 BENCHMARK(BM_TrackStep)->Apply(add_args);
 
-// The same step with the moments summed in double (TrackerOptions::single_precision_moments off):
-// what single precision saves.
-void BM_TrackStepDouble(benchmark::State& state) {
-  const int samples = static_cast<int>(state.range(0));
+// The steady-state step of a tracker with other options, on the same frames as BM_TrackStep.
+void run_step_with(benchmark::State& state, track::TrackerOptions options) {
   const Scenario& s = Scenario::get();
   const auto& visibility = s.visibility(static_cast<int>(state.range(1)));
-  track::TrackerOptions options;
-  options.samples = samples;
-  options.single_precision_moments = false;
-  track::Tracker tracker(s.model, s.mapping, options, s.rate, lcd_sample_set(46, samples).set);
+  options.samples = static_cast<int>(state.range(0));
+  track::Tracker tracker(s.model, s.mapping, options, s.rate, lcd_sample_set(46, options.samples).set);
   for (int f = 0; f < kWarmupFrames; ++f) tracker.process(s.frames[f], s.all_visible[f]);
   std::size_t f = kWarmupFrames;
   for (auto _ : state) {
@@ -59,7 +55,25 @@ void BM_TrackStepDouble(benchmark::State& state) {
     if (++f == s.frames.size()) f = kWarmupFrames;
   }
 }
+
+// The same step with the moments summed in double (TrackerOptions::single_precision_moments off):
+// what single precision saves.
+void BM_TrackStepDouble(benchmark::State& state) {
+  track::TrackerOptions options;
+  options.single_precision_moments = false;
+  run_step_with(state, options);
+}
 BENCHMARK(BM_TrackStepDouble)->Apply(add_args);
+
+// The same step with the ordinary square-root gain (TrackerOptions::information_form_update off):
+// the whole Cyy summed, its Cholesky factor and the solves with it, which the information form
+// (the default) replaces by each marker's 3 x 3 block and a 46 x 46 system.
+void BM_TrackStepOrdinaryGain(benchmark::State& state) {
+  track::TrackerOptions options;
+  options.information_form_update = false;
+  run_step_with(state, options);
+}
+BENCHMARK(BM_TrackStepOrdinaryGain)->Apply(add_args);
 
 // The same step with the constant-velocity model (92-state prediction, the 46-dimensional sampled
 // update, the rates conditioned on it): the latency it adds at the same L.

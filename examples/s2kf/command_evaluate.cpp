@@ -45,6 +45,10 @@ const RegisterCommand evaluate_registration{
       app.add_option("--motion-model", settings->motion_model,
                      "S2KF system model: random-walk (default) or constant-velocity")
           ->check(CLI::IsMember({"random-walk", "constant-velocity"}));
+      app.add_option("--gain", settings->gain,
+                     "S2KF update: information-form (default) or square-root (the whole innovation "
+                     "covariance factorised)")
+          ->check(CLI::IsMember({"information-form", "square-root"}));
       app.add_flag("--smooth", settings->smooth,
                    "also track with the RTS smoother and compare it with the truth");
       app.callback([settings] { run_evaluate(*settings); });

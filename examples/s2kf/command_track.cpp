@@ -83,6 +83,10 @@ const RegisterCommand track_registration{
       app.add_option("--motion-model", settings->motion_model,
                      "S2KF system model: random-walk (default) or constant-velocity (docs/tracking.md)")
           ->check(CLI::IsMember({"random-walk", "constant-velocity"}));
+      app.add_option("--gain", settings->gain,
+                     "S2KF update: information-form (default: each marker's 3 x 3 block and the 46 x 46 "
+                     "state system) or square-root (the whole innovation covariance factorised)")
+          ->check(CLI::IsMember({"information-form", "square-root"}));
       app.add_option("--method", settings->method, "s2kf, or baseline (per-frame Levenberg-Marquardt)")
           ->check(CLI::IsMember({"s2kf", "baseline"}));
       app.add_option("--markerset", settings->markerset,

@@ -174,6 +174,7 @@ void run_evaluate(const EvaluateSettings& settings) {
     track::SessionOptions options;
     options.calibrate = settings.calibrate;
     options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
+    options.tracker.information_form_update = settings.gain == "information-form";
     setup =
         track::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
@@ -327,6 +328,7 @@ void run_evaluate(const EvaluateSettings& settings) {
                   {"markers", setup.mapping.markers_used()},
                   {"marker_set", setup.marker_set.name},
                   {"calibrated", setup.calibration.has_value()},
+                  {"gain", settings.gain},
                   {"hidden_marker_frames_in_input", hidden_in_input},
                   {"warmup_frames", settings.warmup},
                   {"machine", machine_name()},

@@ -201,6 +201,44 @@ TEST(StateChart, RatesFollowTheFoldAndTheReferenceTurn) {
   EXPECT_LT((turned_covariance - covariance_before).cwiseAbs().maxCoeff(), 1e-12);
 }
 
+// A joint at its limit (Theta at -pi/2, where the sine's slope vanishes) or spread far beyond the
+// sine's branch is brought back where the markers can move it: the mean a margin inside, the SD
+// capped by scaling its row and column (so the covariance stays positive definite and the
+// correlations stay as they were); the root and the joints inside the bounds are untouched.
+TEST(StateChart, JointParametersAreKeptWhereTheMarkersCanMoveThem) {
+  const int n = 10;
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(n);
+  mean << 5.0, -3.0, 2.0, 0.1, 0.2, 0.3, -kPi / 2, 1.0, kPi / 2 - 0.01, 0.2;
+  Eigen::MatrixXd shape = Eigen::MatrixXd::Random(n, n);
+  Eigen::MatrixXd covariance = shape * shape.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n);
+  covariance(9, 9) += 4.0;  // SD above 2
+  const Eigen::VectorXd before = mean;
+  const Eigen::MatrixXd covariance_before = covariance;
+  track::keep_joint_parameters_learnable(mean, covariance, 0.05, 0.5);
+  EXPECT_EQ(mean.head(6), before.head(6));
+  EXPECT_DOUBLE_EQ(mean(6), -kPi / 2 + 0.05);
+  EXPECT_EQ(mean(7), before(7));
+  EXPECT_DOUBLE_EQ(mean(8), kPi / 2 - 0.05);
+  EXPECT_EQ(mean(9), before(9));
+  for (Eigen::Index k = 6; k < n; ++k) {
+    EXPECT_LE(covariance(k, k), 0.25 * (1 + 1e-12)) << k;
+    if (covariance_before(k, k) > 0.25) {
+      EXPECT_NEAR(covariance(k, k), 0.25, 1e-12) << k;
+    }
+  }
+  const auto correlation = [](const Eigen::MatrixXd& c, int i, int j) { return c(i, j) / std::sqrt(c(i, i) * c(j, j)); };
+  EXPECT_NEAR(correlation(covariance, 9, 2), correlation(covariance_before, 9, 2), 1e-12);
+  EXPECT_NEAR(correlation(covariance, 9, 7), correlation(covariance_before, 9, 7), 1e-12);
+  EXPECT_EQ(covariance.topLeftCorner(6, 6), covariance_before.topLeftCorner(6, 6));
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(covariance).info(), Eigen::Success);
+  // 0 disables each bound.
+  Eigen::VectorXd same = before;
+  Eigen::MatrixXd same_covariance = covariance_before;
+  track::keep_joint_parameters_learnable(same, same_covariance, 0, 0);
+  EXPECT_EQ(same, before);
+  EXPECT_EQ(same_covariance, covariance_before);
+}
+
 // Calibration reads the whole of a short recording, and spread stretches of a long one.
 TEST(Session, CalibrationStretchesCoverTheRecordingWithinTheBudget) {
   using Stretches = std::vector<std::pair<std::int64_t, std::int64_t>>;

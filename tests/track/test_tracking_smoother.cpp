@@ -89,8 +89,9 @@ TEST(TrackingSmoother, LowersTheErrorAgainstTruthOnTheOccludedHandstand) {
   const Smoothed s = track_and_smooth("handstand_occluded");
   print("filtered", s.filtered);
   print("smoothed", s.smoothed);
-  EXPECT_LT(s.smoothed.segment_orientation_rms_deg,
-            0.97 * s.filtered.segment_orientation_rms_deg);  // 16.3 -> 15.2
+  // Measured 16.3 -> 15.2 deg; 14.8 -> 14.4 since the filter keeps joints off the sine's turning
+  // point at their limits (a better filter leaves the smoother less to do).
+  EXPECT_LT(s.smoothed.segment_orientation_rms_deg, 0.98 * s.filtered.segment_orientation_rms_deg);
   EXPECT_LT(s.smoothed.all_joint_rms_deg, s.filtered.all_joint_rms_deg);
   EXPECT_LT(s.smoothed.limb_flexion_rms_deg, s.filtered.limb_flexion_rms_deg);
   EXPECT_EQ(s.smoothed.joint_limit_violations, 0);
@@ -111,9 +112,11 @@ TEST(TrackingSmoother, StaysOnTheCartwheelThroughPitchNinetyDegrees) {
 
 // The constant-velocity model keeps [pose, rates] and the smoother runs on the whole state with its
 // transition. On the walk it must lower the error; on the cartwheel, whose orientation charts change
-// fastest, it must keep it (measured: walk segments 9.06 -> 8.65 deg, all joints 9.90 -> 9.71,
-// flexion 3.69 -> 2.97; cartwheel segments 10.56 -> 10.60, all joints 9.54 -> 9.81, root
-// 3.57 -> 3.53 deg), and the joints stay in their limits on both.
+// fastest, it must keep it (measured: walk segments 6.25 -> 6.18 deg, all joints 5.92 -> 5.86,
+// flexion 2.92 -> 2.86; cartwheel segments 10.42 -> 10.33, all joints 7.24 -> 7.11, root
+// 3.63 -> 3.61 deg), and the joints stay in their limits on both. (Before the filter kept joints
+// off the sine's turning point at their limits the filtered walk was worse, 9.06 deg segments
+// and 3.69 flexion, and smoothing took the flexion to 2.97.)
 TEST(TrackingSmoother, WorksWithTheConstantVelocityModel) {
   S2KF_SKIP_UNDER_SANITIZERS();
   track::TrackerOptions options;
@@ -123,7 +126,7 @@ TEST(TrackingSmoother, WorksWithTheConstantVelocityModel) {
   print("walk, smoothed", walk.smoothed);
   EXPECT_LT(walk.smoothed.segment_orientation_rms_deg, walk.filtered.segment_orientation_rms_deg);
   EXPECT_LT(walk.smoothed.all_joint_rms_deg, walk.filtered.all_joint_rms_deg);
-  EXPECT_LT(walk.smoothed.limb_flexion_rms_deg, 0.9 * walk.filtered.limb_flexion_rms_deg);
+  EXPECT_LT(walk.smoothed.limb_flexion_rms_deg, walk.filtered.limb_flexion_rms_deg);
   EXPECT_EQ(walk.smoothed.joint_limit_violations, 0);
   const Smoothed cartwheel = track_and_smooth("cartwheel", 0, options);
   print("cartwheel, filtered", cartwheel.filtered);

@@ -16,8 +16,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -48,6 +51,28 @@ struct UpdateOptions {
   /// the factorisation, gain and update stay in double. About twice as fast with wide SIMD. The
   /// ordinary (not iterated) update with positive weights only; off by default.
   bool single_precision_moments = false;
+  /// The gain in information form, for measurements made of independent blocks (a marker's x, y,
+  /// z): the samples give the statistical linearisation G = Cyx S^-T (S the prior's Cholesky
+  /// factor) and, per block of `block_size` components, the spread of the predictions that G does
+  /// not explain; the innovation covariance is taken as G G^T + D, D block-diagonal with those
+  /// spreads plus R's blocks, and the update is solved in the state's whitened coordinates:
+  /// M = I + G^T D^-1 G (n x n), mean += S M^-1 G^T D^-1 (y - y^), C+ = S M^-1 S^T. The full m x m
+  /// Cyy is never formed or factorised, so the cost is O(m n L + m n^2) instead of
+  /// O(m^2 L + m^3). Equal to the ordinary update (to rounding) for a linear model, and for any
+  /// model when no prediction's nonlinear part is correlated across blocks (with one block for the
+  /// whole measurement, always). What it leaves out is the correlation between blocks of the
+  /// predictions' nonlinear parts, which is small where the prior is narrow against the model's
+  /// curvature. Taken only where it is exact in the linear case: positive weights, a sample set
+  /// with zero mean and identity covariance (every LCD, UKF or moment-corrected set), R zero
+  /// between blocks, the ordinary (not iterated) update; otherwise the ordinary update runs.
+  bool information_form = false;
+  /// The information form's limit on how nonlinear the model may be over the samples: where, for
+  /// some observed block, trace(C_b - G_b G_b^T) / trace(R_b) (the predictions' spread that the
+  /// linearisation does not explain, against the noise) exceeds it, this update runs the ordinary
+  /// way. The cross-block correlations the information form leaves out are bounded by those
+  /// spreads (|Omega_ij| <= sqrt(Omega_ii Omega_jj)), so below the limit they are small against R.
+  /// Infinity: never fall back.
+  double information_form_max_nonlinearity = std::numeric_limits<double>::infinity();
 };
 
 struct UpdateResult {
@@ -110,6 +135,46 @@ class FilterCore {
                              const Eigen::VectorXd& y, const Eigen::MatrixXd& r, const UpdateOptions& options,
                              UpdateResult result);
 
+  /// UpdateOptions::information_form, after the moments (Cyx and the diagonal blocks of Cyy, R's
+  /// blocks included) and the block gate: the whitened linearisation, the n x n information
+  /// matrix, and the update of `state`.
+  UpdateResult information_form_gain(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
+                                     const Eigen::VectorXd& y, const UpdateOptions& options, UpdateResult result);
+
+  /// Copies the lower half of posterior_covariance_ into its upper half and factorises it (into
+  /// factor_): whether the posterior is positive definite.
+  bool complete_posterior_is_positive_definite() {
+    posterior_covariance_.template triangularView<Eigen::StrictlyUpper>() =
+        posterior_covariance_.transpose().template triangularView<Eigen::StrictlyUpper>();
+    factor_.compute(posterior_covariance_);
+    return factor_.info() == Eigen::Success;
+  }
+
+  /// Whether the information form applies to this update (see UpdateOptions::information_form).
+  bool information_form_applies(const Eigen::MatrixXd& r, const UpdateOptions& options) const;
+
+  /// Adds sum_i d_i d_i^T over the columns of `d` (deviations already scaled by sqrt(w)) to the
+  /// diagonal blocks of the lower half of `cyy`, blocks being the observed rows of one block of
+  /// `block_size` components (at most kMaxBlock): a product per row and offset within the block,
+  /// accumulated column by column, instead of the whole m x m rank update.
+  template <typename Scalar, typename Deviations>
+  void add_diagonal_block_moments(Eigen::Block<Eigen::MatrixXd>& cyy, const Deviations& d,
+                                  Eigen::Index block_size,
+                                  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& products) const {
+    const Eigen::Index mo = d.rows();
+    if (products.rows() < mo || products.cols() < block_size)
+      products.resize(std::max(products.rows(), mo), std::max(products.cols(), block_size));
+    products.topLeftCorner(mo, block_size).setZero();
+    for (Eigen::Index i = 0; i < d.cols(); ++i) {
+      const auto column = d.col(i);
+      for (Eigen::Index s = 0; s < block_size && s < mo; ++s)
+        products.col(s).head(mo - s).array() += column.head(mo - s).array() * column.segment(s, mo - s).array();
+    }
+    for (Eigen::Index k = 0; k < mo; ++k)
+      for (Eigen::Index s = 0; s < block_size && k + s < mo; ++s)
+        if (index_(k + s) / block_size == index_(k) / block_size) cyy(k + s, k) += static_cast<double>(products(k, s));
+  }
+
   /// After the system model's evaluation (in propagated_): the predicted mean and covariance.
   FilterStatus finish_predict(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
                               const Eigen::MatrixXd& q);
@@ -159,8 +224,21 @@ class FilterCore {
 
   /// The lower half of Cyy += sum w (y_i - y^)(y_i - y^)^T and Cyx = sum w (y_i - y^)(x_i - m)^T
   /// over the observed rows in y_dev_ (deviations) and x_dev_ / half_deviation_ (S z_i).
+  /// `deviations_scaled`: y_dev_ already holds sqrt(w_i) (y_i - y^) (after the information
+  /// form's moments fell back to the ordinary update).
   void accumulate_moments(Eigen::Block<Eigen::MatrixXd>& cyy, Eigen::Block<Eigen::MatrixXd>& cyx,
-                          bool single_precision);
+                          bool single_precision, bool deviations_scaled = false);
+
+  /// The largest trace(C_b - G_b G_b^T) / trace(R_b) over the observed blocks, after
+  /// accumulate_information_moments (see UpdateOptions::information_form_max_nonlinearity).
+  double information_form_nonlinearity(const Eigen::MatrixXd& r, Eigen::Index block_size) const;
+
+  /// UpdateOptions::information_form: adds the diagonal blocks (of `block_size`) of
+  /// sum w (y_i - y^)(y_i - y^)^T to those of `cyy`, and sets regression_ (n x observed) to
+  /// G^T = sum w z_i (y_i - y^)^T, the predictions' regression on the whitened state (the samples
+  /// z_i of N(0, I) themselves, so no solve with the prior's factor is needed).
+  void accumulate_information_moments(Eigen::Block<Eigen::MatrixXd>& cyy, bool single_precision,
+                                      Eigen::Index block_size);
 
   /// The top-left rows x cols of a single-precision scratch matrix, grown when needed.
   static Eigen::Block<Eigen::MatrixXf> single_buffer(Eigen::MatrixXf& buffer, Eigen::Index rows,
@@ -174,8 +252,11 @@ class FilterCore {
   /// improbable under their own predicted covariance, C_b = sum_i w_i d_i d_i^T + R_bb (d_i the
   /// block's sample deviations), which is the block's diagonal block of Cyy (lower half, already
   /// accumulated), and removes their rows (and columns) from Cyy, Cyx, the observed indices and the
-  /// predicted mean. Returns the number of observed components kept.
-  Eigen::Index reject_outlying_blocks(const Eigen::VectorXd& y, const UpdateOptions& options);
+  /// predicted mean. Returns the number of observed components kept. With `diagonal_blocks` (the
+  /// information form) only the diagonal blocks of Cyy are held and moved, and the columns of
+  /// regression_ instead of the rows of Cyx.
+  Eigen::Index reject_outlying_blocks(const Eigen::VectorXd& y, const UpdateOptions& options,
+                                      bool diagonal_blocks = false);
   static constexpr int kMaxBlock = 6;
 
   Eigen::Block<Eigen::MatrixXd> cyy_buffer(Eigen::Index mo) {
@@ -213,6 +294,7 @@ class FilterCore {
 
   SampleSet samples_;
   bool positive_weights_ = true;
+  bool unit_moments_ = false;  ///< the sample set has zero mean and identity covariance
   bool equal_weights_ = false;
   bool symmetric_ = false;             ///< see detect_symmetry
   bool keep_full_deviations_ = false;  ///< draw_samples fills x_dev_ even for a symmetric set
@@ -228,6 +310,12 @@ class FilterCore {
   Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> index_;
   Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> kept_;  ///< observed positions the block gate keeps
   Eigen::MatrixXf y_dev_f_, cyy_f_, pair_difference_f_, half_deviation_f_, cyx_f_;  ///< single precision
+  // The information form: sqrt(w) z of the samples (the + half of a symmetric set), G^T, the
+  // n x n system and the products per block (see add_diagonal_block_moments).
+  Eigen::MatrixXd scaled_points_, regression_, information_, whitening_, block_products_;
+  Eigen::MatrixXf scaled_points_f_, regression_f_, block_products_f_;
+  Eigen::LLT<Eigen::MatrixXd> information_factor_;
+  Eigen::VectorXd information_vector_, whitened_step_, state_step_;
   Eigen::Index observed_count_ = 0;
   bool direct_ = false;  ///< the model writes straight into y_dev_ (see prepare_predictions)
   std::vector<Eigen::Index> rejected_blocks_;  ///< ascending
@@ -346,7 +434,23 @@ S2KF_INLINE FilterCore::FilterCore(SampleSet samples) : samples_(std::move(sampl
     throw DimensionError("SmartSamplingKalmanFilter: the sample set is empty or its weights do not match");
   positive_weights_ = (samples_.weights.array() > 0).all();
   sqrt_weights_ = samples_.weights.array().abs().sqrt().matrix();
+  {
+    // The information form reads the regression on the state off Cyx alone, which assumes the
+    // samples' own moments are exactly those of N(0, I) (the LCD and UKF sets are corrected to it).
+    const Eigen::Index n = samples_.dimension();
+    const Eigen::VectorXd first = samples_.points * samples_.weights;
+    const Eigen::MatrixXd second =
+        samples_.points * samples_.weights.asDiagonal() * samples_.points.transpose();
+    unit_moments_ = first.cwiseAbs().maxCoeff() < 1e-10 &&
+                    (second - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-10;
+  }
   detect_symmetry();
+  if (unit_moments_ && positive_weights_) {
+    scaled_points_ = symmetric_ ? Eigen::MatrixXd(samples_.points.middleCols(origin_count_, half_count_) *
+                                                  sqrt_weights_.segment(origin_count_, half_count_).asDiagonal())
+                                : Eigen::MatrixXd(samples_.points * sqrt_weights_.asDiagonal());
+    scaled_points_f_ = scaled_points_.cast<float>();
+  }
 }
 
 // Out of the class, so that a program that links the compiled library (S2KF_COMPILED) takes
@@ -422,10 +526,25 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
   // Cyy = sum w (y_i - y^)(y_i - y^)^T + R_oo and Cyx = sum w (y_i - y^)(x_i - m)^T, using the
   // exactly zero-mean deviations S z_i for x.
   auto cyy = cyy_buffer(mo);
+  const bool single = options.single_precision_moments && positive_weights_;
+  bool deviations_scaled = false;
+  if (information_form_applies(r, options)) {
+    // Only the diagonal blocks of Cyy (and of R) are needed.
+    const Eigen::Index b = options.block_size;
+    for (Eigen::Index j = 0; j < mo; ++j)
+      for (Eigen::Index i = j; i < mo && index_(i) / b == index_(j) / b; ++i) cyy(i, j) = r(index_(i), index_(j));
+    accumulate_information_moments(cyy, single, b);
+    if (information_form_nonlinearity(r, b) <= options.information_form_max_nonlinearity) {
+      if (options.block_gate_probability > 0) result.observed = reject_outlying_blocks(y, options, true);
+      result.rejected_blocks = static_cast<Eigen::Index>(rejected_blocks_.size());
+      return information_form_gain(mean, covariance, y, options, result);
+    }
+    deviations_scaled = !single;  // the double-precision moments scaled y_dev_ in place
+  }
   for (Eigen::Index j = 0; j < mo; ++j)
     for (Eigen::Index i = j; i < mo; ++i) cyy(i, j) = r(index_(i), index_(j));
   auto cyx = cyx_buffer(mo, n);
-  accumulate_moments(cyy, cyx, options.single_precision_moments && positive_weights_);
+  accumulate_moments(cyy, cyx, single, deviations_scaled);
   // The outlier gate reads each marker's predicted covariance off the diagonal blocks of Cyy and
   // drops the rows (and columns) of the blocks it rejects.
   if (options.block_gate_probability > 0 && positive_weights_)
@@ -453,14 +572,129 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
   // C+ = C - A A^T must stay positive definite; check on a copy before touching the state.
   posterior_covariance_ = covariance;
   posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(cyx_kept.transpose(), -1.0);
-  posterior_covariance_.template triangularView<Eigen::StrictlyUpper>() =
-      posterior_covariance_.transpose().template triangularView<Eigen::StrictlyUpper>();
-  factor_.compute(posterior_covariance_);
-  if (factor_.info() != Eigen::Success) {
+  if (!complete_posterior_is_positive_definite()) {
     result.status = FilterStatus::posterior_not_positive_definite;
     return result;
   }
   mean.noalias() += cyx_kept.transpose() * innovation;
+  covariance = posterior_covariance_;
+  return result;
+}
+
+S2KF_INLINE bool FilterCore::information_form_applies(const Eigen::MatrixXd& r,
+                                                       const UpdateOptions& options) const {
+  if (!options.information_form || !positive_weights_ || !unit_moments_ || options.iterations > 1) return false;
+  // R must not couple the blocks: the information form keeps only its diagonal blocks. Checked
+  // on the whole of R below each block, column by column, as an OR of the entries' bits without
+  // the sign (so -0 counts as zero): an integer reduction the compiler vectorises.
+  const Eigen::Index b = options.block_size, m = r.rows();
+  std::uint64_t bits = 0;
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const double* column = r.data() + j * m;
+    for (Eigen::Index i = std::min(m, (j / b + 1) * b); i < m; ++i) {
+      std::uint64_t entry;
+      std::memcpy(&entry, column + i, sizeof entry);
+      bits |= entry;
+    }
+  }
+  return (bits & ~(std::uint64_t{1} << 63)) == 0;
+}
+
+S2KF_INLINE double FilterCore::information_form_nonlinearity(const Eigen::MatrixXd& r,
+                                                             Eigen::Index block_size) const {
+  const Eigen::Index mo = observed_count_;
+  const auto gt = regression_.leftCols(mo);
+  double largest = 0;
+  for (Eigen::Index k = 0; k < mo;) {
+    double unexplained = 0, noise = 0;
+    const Eigen::Index block = index_(k) / block_size;
+    for (; k < mo && index_(k) / block_size == block; ++k) {
+      const double variance = r(index_(k), index_(k));
+      noise += variance;
+      unexplained += cyy_(k, k) - variance - gt.col(k).squaredNorm();
+    }
+    if (!(unexplained <= largest * noise)) largest = noise > 0 ? unexplained / noise : std::numeric_limits<double>::infinity();
+  }
+  return largest;
+}
+
+S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::VectorXd> mean,
+                                                           Eigen::Ref<Eigen::MatrixXd> covariance,
+                                                           const Eigen::VectorXd& y, const UpdateOptions& options,
+                                                           UpdateResult result) {
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
+  const Eigen::Index n = mean.size(), mo = result.observed, b = options.block_size;
+  // In the whitened coordinates u = S^-1 (x - m) the prior is N(0, I) and the predictions regress
+  // on u with G (regression_ holds G^T, one column per observed component).
+  auto gt = regression_.leftCols(mo);
+  auto innovation = innovation_.head(mo);
+  for (Eigen::Index k = 0; k < mo; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
+  // Per block: D_b = C_b + R_b - G_b G_b^T (the spread G does not explain, plus the noise), then
+  // G_b and the innovation whitened by D_b's Cholesky factor L_b (forward substitution on the
+  // block's columns of G^T).
+  const auto whiten_block = [&](auto& d_block, Eigen::Index k, Eigen::Index d) {
+    for (Eigen::Index j = 0; j < d; ++j)
+      for (Eigen::Index i = j; i < d; ++i)
+        d_block(i, j) = d_block(j, i) = cyy_(k + i, k + j) - gt.col(k + i).dot(gt.col(k + j));
+    using Matrix = std::decay_t<decltype(d_block)>;
+    const Eigen::LLT<Matrix> llt(d_block);
+    if (llt.info() != Eigen::Success) return false;
+    const auto& l = llt.matrixLLT();
+    for (Eigen::Index i = 0; i < d; ++i) {
+      for (Eigen::Index j = 0; j < i; ++j) {
+        gt.col(k + i) -= l(i, j) * gt.col(k + j);
+        innovation(k + i) -= l(i, j) * innovation(k + j);
+      }
+      gt.col(k + i) /= l(i, i);
+      innovation(k + i) /= l(i, i);
+    }
+    return true;
+  };
+  for (Eigen::Index k = 0; k < mo;) {
+    Eigen::Index end = k;
+    while (end < mo && index_(end) / b == index_(k) / b) ++end;
+    bool positive;
+    if (end - k <= kMaxBlock) {
+      Small d_block(end - k, end - k);
+      positive = whiten_block(d_block, k, end - k);
+    } else {
+      Eigen::MatrixXd d_block(end - k, end - k);
+      positive = whiten_block(d_block, k, end - k);
+    }
+    if (!positive) {
+      result.status = FilterStatus::innovation_not_positive_definite;
+      return result;
+    }
+    k = end;
+  }
+  // M = I + W^T W with W = D^-1/2 G; u+ = M^-1 W^T e; NIS = e^T (G G^T + D)^-1 e by Woodbury.
+  information_.setIdentity(n, n);
+  rank_update_lower(information_, gt);
+  information_factor_.compute(information_);
+  if (information_factor_.info() != Eigen::Success) {
+    result.status = FilterStatus::innovation_not_positive_definite;
+    return result;
+  }
+  information_vector_.noalias() = gt * innovation;
+  whitened_step_ = information_vector_;
+  information_factor_.solveInPlace(whitened_step_);
+  result.nis = std::max(0.0, innovation.squaredNorm() - information_vector_.dot(whitened_step_));
+  if (gated(result.nis, mo, options)) {
+    result.status = FilterStatus::gated;
+    return result;
+  }
+  // mean += S u+, C+ = (S L_M^-T)(S L_M^-T)^T.
+  state_step_.noalias() = factor_.matrixL() * whitened_step_;
+  whitening_.setZero(n, n);
+  whitening_.template triangularView<Eigen::Lower>() = factor_.matrixL();
+  information_factor_.matrixU().template solveInPlace<Eigen::OnTheRight>(whitening_);
+  posterior_covariance_.setZero(n, n);
+  posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(whitening_);
+  if (!complete_posterior_is_positive_definite()) {
+    result.status = FilterStatus::posterior_not_positive_definite;
+    return result;
+  }
+  mean += state_step_;
   covariance = posterior_covariance_;
   return result;
 }
@@ -561,7 +795,8 @@ S2KF_INLINE FilterStatus FilterCore::gather_observed(Eigen::Index m) {
 }
 
 S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& cyy,
-                                                Eigen::Block<Eigen::MatrixXd>& cyx, bool single_precision) {
+                                                Eigen::Block<Eigen::MatrixXd>& cyx, bool single_precision,
+                                                bool deviations_scaled) {
   const Eigen::Index mo = observed_count_;
   auto y_dev = y_dev_.topRows(mo);
   if (symmetric_) {
@@ -593,7 +828,7 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
       cyx = cyx_f.template cast<double>();
       return;
     }
-    scale_columns_by_sqrt_weights(y_dev);
+    if (!deviations_scaled) scale_columns_by_sqrt_weights(y_dev);
     rank_update_lower(cyy, y_dev);
     auto pair_difference = pair_difference_.topRows(mo);
     pair_difference.noalias() = y_dev.middleCols(o, h) - y_dev.rightCols(h);
@@ -603,7 +838,7 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
       cyx.noalias() += pair_difference.middleCols(k, c) * half_deviation_.middleCols(k, c).transpose();
     }
   } else if (positive_weights_) {
-    scale_columns_by_sqrt_weights(y_dev);
+    if (!deviations_scaled) scale_columns_by_sqrt_weights(y_dev);
     rank_update_lower(cyy, y_dev);
     x_dev_ = x_dev_ * sqrt_weights_.asDiagonal();
     cyx.noalias() = y_dev * x_dev_.transpose();
@@ -613,8 +848,55 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
   }
 }
 
+S2KF_INLINE void FilterCore::accumulate_information_moments(Eigen::Block<Eigen::MatrixXd>& cyy,
+                                                            bool single_precision, Eigen::Index block_size) {
+  const Eigen::Index mo = observed_count_, n = samples_.dimension(), count = samples_.count();
+  auto y_dev = y_dev_.topRows(mo);
+  if (regression_.rows() != n || regression_.cols() < mo) regression_.resize(n, std::max(regression_.cols(), mo));
+  auto regression = regression_.leftCols(mo);
+  // Pairs +z_k, -z_k with equal weights: sum over a pair of w z (y_i - y^)^T is
+  // w z_k (y+_k - y-_k)^T, so G^T costs half the product over all samples.
+  const Eigen::Index h = half_count_, o = origin_count_;
+  const auto product = [](auto& target, const auto& points, const auto& deviations) {
+    target.setZero();
+    for (Eigen::Index k = 0; k < points.cols(); k += kChunk) {
+      const Eigen::Index c = std::min(kChunk, points.cols() - k);
+      target.noalias() += points.middleCols(k, c) * deviations.middleCols(k, c).transpose();
+    }
+  };
+  if (single_precision) {
+    // sqrt(w_i) (y_i - y^), scaled in double and rounded once.
+    auto y_dev_f = single_buffer(y_dev_f_, mo, count);
+    if (equal_weights_)
+      y_dev_f = (sqrt_weights_(0) * y_dev).template cast<float>();
+    else
+      y_dev_f = (y_dev * sqrt_weights_.asDiagonal()).template cast<float>();
+    add_diagonal_block_moments(cyy, y_dev_f, block_size, block_products_f_);
+    auto regression_f = single_buffer(regression_f_, n, mo);
+    if (symmetric_) {
+      auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
+      pair_difference_f.noalias() = y_dev_f.middleCols(o, h) - y_dev_f.rightCols(h);
+      product(regression_f, scaled_points_f_, pair_difference_f);
+    } else {
+      product(regression_f, scaled_points_f_, y_dev_f);
+    }
+    regression = regression_f.template cast<double>();
+    return;
+  }
+  scale_columns_by_sqrt_weights(y_dev);
+  add_diagonal_block_moments(cyy, y_dev, block_size, block_products_);
+  if (symmetric_) {
+    auto pair_difference = pair_difference_.topRows(mo);
+    pair_difference.noalias() = y_dev.middleCols(o, h) - y_dev.rightCols(h);
+    product(regression, scaled_points_, pair_difference);
+  } else {
+    product(regression, scaled_points_, y_dev);
+  }
+}
+
 S2KF_INLINE Eigen::Index FilterCore::reject_outlying_blocks(const Eigen::VectorXd& y,
-                                                            const UpdateOptions& options) {
+                                                            const UpdateOptions& options,
+                                                            bool diagonal_blocks) {
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
   using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxBlock, 1>;
   const Eigen::Index mo = observed_count_, b = options.block_size;
@@ -663,10 +945,16 @@ S2KF_INLINE Eigen::Index FilterCore::reject_outlying_blocks(const Eigen::VectorX
   // (then rows) are written in ascending order, so nothing is read after it was overwritten.
   for (Eigen::Index j = 0; j < kept; ++j) {
     const Eigen::Index from_j = kept_(j);
-    for (Eigen::Index i = j; i < kept; ++i) cyy_(i, j) = cyy_(kept_(i), from_j);
+    for (Eigen::Index i = j; i < kept; ++i) {
+      if (diagonal_blocks && index_(kept_(i)) / b != index_(from_j) / b) break;  // past j's block
+      cyy_(i, j) = cyy_(kept_(i), from_j);
+    }
   }
-  for (Eigen::Index c = 0; c < cyx_.cols(); ++c)
-    for (Eigen::Index i = 0; i < kept; ++i) cyx_(i, c) = cyx_(kept_(i), c);
+  if (diagonal_blocks)
+    for (Eigen::Index i = 0; i < kept; ++i) regression_.col(i) = regression_.col(kept_(i));
+  else
+    for (Eigen::Index c = 0; c < cyx_.cols(); ++c)
+      for (Eigen::Index i = 0; i < kept; ++i) cyx_(i, c) = cyx_(kept_(i), c);
   for (Eigen::Index i = 0; i < kept; ++i) {
     index_(i) = index_(kept_(i));
     y_mean_(i) = y_mean_(kept_(i));

@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 
 namespace s2kf::track {
@@ -37,6 +38,17 @@ inline Eigen::Index pose_dimension_of(const Eigen::VectorXd& mean, bool with_rat
 /// the sign of that state's covariance row and column flips). With rates (the constant-velocity
 /// state), a reflected Theta's rate changes sign too: d(pi - Theta)/dt = -dTheta/dt.
 void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, bool with_rates = false);
+
+/// Keeps every (folded) Theta where the markers can still move it: its mean at least `margin`
+/// inside +-pi/2 and its SD at most `max_sd` (the row and column of the covariance scaled, which
+/// keeps it positive definite). At +-pi/2 the slope of theta = mid + half sin(Theta) vanishes, and
+/// for a symmetric spread of samples around it the predictions have no linear part in Theta, so a
+/// linear-regression filter learns nothing about the joint there and its variance only grows; a
+/// Theta spread far beyond pi/2 covers the whole joint range and has no linear part either. Either
+/// way the joint would stay at its limit whatever the markers show. With rates, a Theta held at
+/// the edge loses a rate that points further out. 0 disables a bound.
+void keep_joint_parameters_learnable(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, double margin,
+                                     double max_sd, bool with_rates = false);
 
 /// Expresses the orientation rate (states n+3..n+5 of a state with rates) in a chart whose
 /// reference is turned by `turn` (new reference = old reference * turn): a rate about the old
@@ -82,6 +94,24 @@ S2KF_INLINE void fold_joint_parameters(Eigen::VectorXd& mean, Eigen::MatrixXd& c
         mean(n + k) = -mean(n + k);
         flip_state_sign(covariance, n + k);
       }
+    }
+  }
+}
+
+S2KF_INLINE void keep_joint_parameters_learnable(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance,
+                                                 double margin, double max_sd, bool with_rates) {
+  const Eigen::Index n = pose_dimension_of(mean, with_rates);
+  const double edge = kPi / 2 - margin;
+  for (Eigen::Index k = kFirstJointState; k < n; ++k) {
+    if (margin > 0 && std::abs(mean(k)) > edge) {
+      // Held at the edge: a rate that would carry it further out is spent against the limit.
+      if (with_rates && mean(n + k) * mean(k) > 0) mean(n + k) = 0;
+      mean(k) = std::clamp(mean(k), -edge, edge);
+    }
+    if (max_sd > 0 && covariance(k, k) > max_sd * max_sd) {
+      const double scale = max_sd / std::sqrt(covariance(k, k));
+      covariance.row(k) *= scale;
+      covariance.col(k) *= scale;
     }
   }
 }

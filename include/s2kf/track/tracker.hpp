@@ -316,6 +316,8 @@ S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points
     update_options.block_gate_probability = options_.marker_gate_probability;  // once converged
   update_options.block_size = 3;
   update_options.single_precision_moments = options_.single_precision_moments;
+  update_options.information_form = options_.information_form_update;
+  update_options.information_form_max_nonlinearity = options_.information_form_max_nonlinearity;
   ++frames_since_start_;
   estimate_.status = FilterStatus::nothing_observed;
   estimate_.nis = std::numeric_limits<double>::quiet_NaN();
@@ -453,11 +455,15 @@ S2KF_INLINE void Tracker::recentre() {
   reference_rotation_ = measurement_model_.reference_orientation();
   if (!with_rates()) {
     fold_joint_parameters(state_.mean, state_.covariance);
+    keep_joint_parameters_learnable(state_.mean, state_.covariance, options_.joint_parameter_margin,
+                                    options_.joint_parameter_max_sd);
     return;
   }
   motion_.mean.segment<3>(3).setZero();
   turn_orientation_rate(motion_.mean, motion_.covariance, turn);
   fold_joint_parameters(motion_.mean, motion_.covariance, true);
+  keep_joint_parameters_learnable(motion_.mean, motion_.covariance, options_.joint_parameter_margin,
+                                  options_.joint_parameter_max_sd, true);
   const Eigen::Index n = state_dimension();
   state_.mean = motion_.mean.head(n);
   state_.covariance = motion_.covariance.topLeftCorner(n, n);

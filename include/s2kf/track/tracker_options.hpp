@@ -71,6 +71,29 @@ struct TrackerOptions {
   /// (UpdateOptions::single_precision_moments); factorisation, gain and update stay in double.
   /// A quarter of the rank update's time, with an effect far below the marker noise.
   bool single_precision_moments = true;
+  /// The update's gain in information form (UpdateOptions::information_form): each marker's x, y,
+  /// z a block, the state's 46 x 46 information matrix solved instead of the 150 x 150 innovation
+  /// covariance, and Cyy never formed beyond each marker's own 3 x 3 block. It leaves out only the
+  /// correlation between markers of the predictions' nonlinear parts, which the 10 mm marker noise
+  /// dwarfs once the tracker has converged (the first, iterated frames always use the ordinary
+  /// update).
+  bool information_form_update = true;
+  /// UpdateOptions::information_form_max_nonlinearity: a frame in which some marker's predicted
+  /// spread that the linearisation does not explain exceeds this multiple of its noise variance
+  /// (a wide prior over a curved model: a segment hidden for a while, a fast motion) is updated
+  /// the ordinary way. In steady tracking the hands' markers carry 1.5-2.3 (their wrists' spread
+  /// over the sine's curve); of 1, 1.5, 2, 2.5 and no limit, 2 kept every accuracy mean of 24
+  /// simulated cases within 1 % of the ordinary update's or better (docs/benchmarks.md).
+  double information_form_max_nonlinearity = 2.0;
+
+  /// After every update each joint's Theta is kept learnable (keep_joint_parameters_learnable):
+  /// its mean at least this far (rad) inside +-pi/2, where the sine's slope vanishes and a joint
+  /// that reached its limit would stay there whatever the markers show; and its SD at most
+  /// joint_parameter_max_sd. 0 disables either bound.
+  /// 0.1 rad keeps a joint within half (1 - cos 0.1) = 0.5 % of its half range of the limit, and
+  /// brought a shoulder that the walk had left at its limit back (docs/tracking.md).
+  double joint_parameter_margin = 0.1;
+  double joint_parameter_max_sd = 0.5;
   /// Forward kinematics of the samples in single precision
   /// (MarkerMeasurementModel::set_single_precision): another 10 % of the step, but off by default:
   /// float rounds lab coordinates to about 1e-4 mm, which is not small against the spread of the
@@ -126,6 +149,12 @@ struct TrackerOptions {
       throw std::invalid_argument("the marker gate probability must be in [0, 1)");
     if (!(axial_split_sd_rad >= 0 && std::isfinite(axial_split_sd_rad)))
       throw std::invalid_argument("the axial-split SD must be a non-negative number of radians");
+    if (!(information_form_max_nonlinearity >= 0))
+      throw std::invalid_argument("the information form's nonlinearity limit must not be negative");
+    if (!(joint_parameter_margin >= 0 && joint_parameter_margin < 1.5 && joint_parameter_max_sd >= 0 &&
+          std::isfinite(joint_parameter_max_sd)))
+      throw std::invalid_argument(
+          "the joint-parameter margin must lie in [0, 1.5) rad and its largest SD be a non-negative number");
     if (!(frozen_marker_s >= 0 && std::isfinite(frozen_marker_s)))
       throw std::invalid_argument("the frozen-marker time must be a non-negative number of seconds");
   }

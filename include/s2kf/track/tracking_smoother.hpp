@@ -74,7 +74,11 @@ S2KF_INLINE void TrackingSmoother::smooth(io::MotionTable& motion) const {
     motion.values.row(row).head<3>() = m.head<3>().transpose();
     motion.values.row(row).segment<3>(3) =
         body::rpy_from_rotation(chart_rotation(references_[k], m.segment<3>(3))).transpose();
-    motion.values.row(row).tail(joints) = joints_.angles(m.segment(kFirstJointState, joints)).transpose();
+    // A smoothed Theta beyond +-pi/2 says the joint is, if anything, further towards its limit
+    // than the filter (which keeps Theta inside) had it: the sine would reflect it back into the
+    // range, so it is held at the limit instead.
+    const Eigen::VectorXd theta = m.segment(kFirstJointState, joints).cwiseMax(-kPi / 2).cwiseMin(kPi / 2);
+    motion.values.row(row).tail(joints) = joints_.angles(theta).transpose();
   }
 }
 S2KF_INLINE void TrackingSmoother::record(const Tracker& tracker, Eigen::Index row) {

@@ -1,0 +1,290 @@
+// The information-form update (UpdateOptions::information_form) against the closed-form Kalman
+// filter and the ordinary S2KF update: equal where the innovation covariance is G G^T + D with D
+// block-diagonal (linear models; nonlinear parts confined to one block), different only by the
+// cross-block correlation of nonlinear parts, and never taken where it would not be exact.
+#include <s2kf/core/lcd_sample_set.hpp>
+#include <s2kf/core/smart_sampling_kalman_filter.hpp>
+
+#include "kalman_reference.hpp"
+
+#include <gtest/gtest.h>
+#include <Eigen/LU>
+
+#include <random>
+#include <vector>
+
+namespace {
+
+using s2kf::GaussianXd;
+using s2kf::ObservedMask;
+using s2kf::S2kf;
+using s2kf::SampleSet;
+using s2kf::UpdateOptions;
+
+using s2kf::test::kalman_update;
+using s2kf::test::LinearModel;
+using s2kf::test::random_matrix;
+using s2kf::test::random_spd;
+using s2kf::test::relative_error;
+
+// A random noise covariance that couples the components of a block but not the blocks.
+Eigen::MatrixXd block_diagonal_spd(int m, int block, std::mt19937_64& rng) {
+  Eigen::MatrixXd r = Eigen::MatrixXd::Zero(m, m);
+  for (int k = 0; k < m; k += block) r.block(k, k, block, block) = random_spd(block, rng);
+  return r;
+}
+
+UpdateOptions information_form(int block_size) {
+  UpdateOptions options;
+  options.information_form = true;
+  options.block_size = block_size;
+  return options;
+}
+
+// Blocks of three components; the blocks listed in `nonlinear` add a smooth nonlinear function
+// of the whole state (so their nonlinear parts are correlated with each other), the rest are
+// linear in the state.
+struct PartlyNonlinearModel {
+  Eigen::MatrixXd h;
+  std::vector<int> nonlinear;
+  void operator()(const Eigen::MatrixXd& x, Eigen::MatrixXd& y) const {
+    y = h * x;
+    for (const int block : nonlinear)
+      for (Eigen::Index i = 0; i < x.cols(); ++i) {
+        const double a = x(0, i), b = x(1, i);
+        y(3 * block, i) += 0.8 * std::sin(a * b) + 0.3 * a * a;
+        y(3 * block + 1, i) += 0.5 * a * b;
+        y(3 * block + 2, i) += 0.4 * std::cos(a + b) * b;
+      }
+  }
+};
+
+TEST(InformationForm, LinearModelsGiveTheKalmanUpdateAtTheTrackersSize) {
+  // 46 states and 50 blocks of 3, as the tracker with 50 markers; with 60 components hidden every
+  // other one, many blocks keep one or two of their components.
+  std::mt19937_64 rng(21);
+  const int n = 46, m = 150;
+  for (const SampleSet& set : {s2kf::ukf_sample_set(n), s2kf::compute_lcd_sample_set(n, 301).set}) {
+    for (const int hidden : {0, 60}) {
+      LinearModel model{random_matrix(m, n, rng), random_matrix(m, 1, rng)};
+      const GaussianXd prior(random_matrix(n, 1, rng), random_spd(n, rng));
+      const Eigen::MatrixXd r = block_diagonal_spd(m, 3, rng);
+      const Eigen::VectorXd y = random_matrix(m, 1, rng);
+      ObservedMask observed = ObservedMask::Constant(m, true);
+      for (int i = 0; i < hidden; ++i) observed(2 * i) = false;
+      GaussianXd information = prior, ordinary = prior, kf = prior;
+      S2kf filter(set);
+      const s2kf::UpdateResult a = filter.update(information, model, y, r, observed, information_form(3));
+      const s2kf::UpdateResult b = filter.update(ordinary, model, y, r, observed);
+      ASSERT_TRUE(a.ok() && b.ok());
+      kalman_update(kf, model.h, y - model.offset, r, observed);
+      EXPECT_LT(relative_error(information.mean, kf.mean), 1e-9) << set.kind << ", " << hidden << " hidden";
+      EXPECT_LT(relative_error(information.covariance, kf.covariance), 1e-9) << set.kind << ", " << hidden;
+      EXPECT_NEAR(a.nis, b.nis, 1e-8 * b.nis) << set.kind << ", " << hidden << " hidden";
+      EXPECT_EQ(a.observed, m - hidden);
+    }
+  }
+}
+
+TEST(InformationForm, SinglePrecisionMomentsStayWithinFloatRoundingOfTheKalmanUpdate) {
+  // Each block's unexplained spread is C_b - G_b G_b^T, a difference of numbers of the size of the
+  // predicted spread (about 5e3 here, float rounding 6e-8 of it), set against R = 2: measured
+  // 1.9e-4 relative to the Kalman update; the double update is within 1e-9, a wrong formula
+  // misses by order 1.
+  std::mt19937_64 rng(22);
+  const int n = 46, m = 150;
+  const SampleSet set = s2kf::compute_lcd_sample_set(n, 301).set;
+  LinearModel model{random_matrix(m, n, rng), random_matrix(m, 1, rng)};
+  const GaussianXd prior(random_matrix(n, 1, rng), random_spd(n, rng));
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(m, m) * 2.0;
+  const Eigen::VectorXd y = random_matrix(m, 1, rng);
+  GaussianXd information = prior, twice = prior, kf = prior;
+  UpdateOptions options = information_form(3);
+  options.single_precision_moments = true;
+  S2kf filter(set);
+  ASSERT_TRUE(filter.update(information, model, y, r, options).ok());
+  ASSERT_TRUE(filter.update(twice, model, y, r, information_form(3)).ok());
+  kalman_update(kf, model.h, y - model.offset, r, ObservedMask::Constant(m, true));
+  EXPECT_LT(relative_error(information.mean, kf.mean), 1e-3);
+  EXPECT_LT(relative_error(information.covariance, kf.covariance), 1e-3);
+  EXPECT_LT(relative_error(twice.mean, kf.mean), 1e-9);
+  EXPECT_GT((information.mean - twice.mean).norm(), 0.0);  // the option took effect
+}
+
+TEST(InformationForm, ANonlinearityConfinedToOneBlockGivesTheOrdinaryUpdate) {
+  // The nonlinear parts of a single block are correlated with nothing else, so the ordinary
+  // update's Cyy is exactly G G^T + D with D block-diagonal.
+  std::mt19937_64 rng(23);
+  const int n = 4, m = 12;
+  for (const SampleSet& set : {s2kf::ukf_sample_set(n), s2kf::compute_lcd_sample_set(n, 41).set}) {
+    PartlyNonlinearModel model{random_matrix(m, n, rng), {1}};
+    const GaussianXd prior(random_matrix(n, 1, rng) * 0.3, random_spd(n, rng) * 0.2);
+    const Eigen::MatrixXd r = block_diagonal_spd(m, 3, rng) * 0.1;
+    const Eigen::VectorXd y = random_matrix(m, 1, rng);
+    GaussianXd information = prior, ordinary = prior;
+    S2kf filter(set);
+    const s2kf::UpdateResult a = filter.update(information, model, y, r, information_form(3));
+    const s2kf::UpdateResult b = filter.update(ordinary, model, y, r);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_LT(relative_error(information.mean, ordinary.mean), 1e-10) << set.kind;
+    EXPECT_LT(relative_error(information.covariance, ordinary.covariance), 1e-10) << set.kind;
+    EXPECT_NEAR(a.nis, b.nis, 1e-9 * b.nis) << set.kind;
+  }
+}
+
+TEST(InformationForm, OneBlockForTheWholeMeasurementIsTheOrdinaryUpdateOfAnyModel) {
+  // With a single block D holds every nonlinear correlation, and the update is the ordinary one
+  // by the Woodbury identity; 6 components use the small blocks, 12 the general path.
+  std::mt19937_64 rng(24);
+  const int n = 4;
+  for (const int m : {6, 12}) {
+    PartlyNonlinearModel model{random_matrix(m, n, rng), {0, 1}};
+    if (m == 12) model.nonlinear = {0, 1, 2, 3};
+    const GaussianXd prior(random_matrix(n, 1, rng) * 0.3, random_spd(n, rng) * 0.3);
+    const Eigen::MatrixXd r = random_spd(m, rng) * 0.1;
+    const Eigen::VectorXd y = random_matrix(m, 1, rng);
+    GaussianXd information = prior, ordinary = prior;
+    S2kf filter(s2kf::compute_lcd_sample_set(n, 41).set);
+    ASSERT_TRUE(filter.update(information, model, y, r, information_form(m)).ok());
+    ASSERT_TRUE(filter.update(ordinary, model, y, r).ok());
+    EXPECT_LT(relative_error(information.mean, ordinary.mean), 1e-10) << m;
+    EXPECT_LT(relative_error(information.covariance, ordinary.covariance), 1e-10) << m;
+  }
+}
+
+TEST(InformationForm, WhatItLeavesOutIsTheCrossBlockCorrelationOfNonlinearParts) {
+  // Two blocks share one nonlinearity: the information form treats their nonlinear parts as
+  // independent, so it differs from the ordinary update, by a little; with a narrow prior (where
+  // the model is nearly linear over the samples) by much less.
+  std::mt19937_64 rng(25);
+  const int n = 4, m = 9;
+  PartlyNonlinearModel model{random_matrix(m, n, rng), {0, 2}};
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(m, m) * 0.5;
+  const Eigen::VectorXd y = random_matrix(m, 1, rng);
+  const Eigen::VectorXd mean = random_matrix(n, 1, rng) * 0.3;
+  const Eigen::MatrixXd shape = random_spd(n, rng);
+  double previous = 0;
+  for (const double scale : {0.3, 0.003}) {
+    const GaussianXd prior(mean, shape * scale);
+    GaussianXd information = prior, ordinary = prior;
+    S2kf filter(s2kf::compute_lcd_sample_set(n, 41).set);
+    ASSERT_TRUE(filter.update(information, model, y, r, information_form(3)).ok());
+    ASSERT_TRUE(filter.update(ordinary, model, y, r).ok());
+    const double difference = relative_error(information.mean, ordinary.mean);
+    if (scale == 0.3) {
+      EXPECT_GT(difference, 1e-6);  // the option took effect (measured 0.07)
+      EXPECT_LT(difference, 0.2);
+    } else {
+      EXPECT_LT(difference, 1e-3 * previous);  // measured 8e-5 of it
+    }
+    previous = difference;
+  }
+}
+
+TEST(InformationForm, TheOrdinaryUpdateRunsWhereTheInformationFormWouldNotBeExact) {
+  // Cross-block nonlinearity (where the two forms differ), then: R coupling two blocks, a set
+  // with a negative weight, an iterated update. Each must give exactly the ordinary result.
+  std::mt19937_64 rng(26);
+  const int n = 4, m = 9;
+  PartlyNonlinearModel model{random_matrix(m, n, rng), {0, 2}};
+  const GaussianXd prior(random_matrix(n, 1, rng) * 0.3, random_spd(n, rng) * 0.3);
+  const Eigen::VectorXd y = random_matrix(m, 1, rng);
+  Eigen::MatrixXd coupled = Eigen::MatrixXd::Identity(m, m) * 0.5;
+  coupled(4, 0) = coupled(0, 4) = 0.1;
+  const SampleSet negative = s2kf::ukf_sample_set(n, -1.0);
+  ASSERT_LT(negative.weights.minCoeff(), 0.0);
+  struct Case {
+    const char* what;
+    SampleSet set;
+    Eigen::MatrixXd r;
+    int iterations;
+  };
+  const Eigen::MatrixXd diagonal = Eigen::MatrixXd::Identity(m, m) * 0.5;
+  for (const Case& c : {Case{"coupled R", s2kf::compute_lcd_sample_set(n, 41).set, coupled, 1},
+                        Case{"negative weight", negative, diagonal, 1},
+                        Case{"iterated", s2kf::compute_lcd_sample_set(n, 41).set, diagonal, 3}}) {
+    GaussianXd information = prior, ordinary = prior;
+    S2kf filter(c.set);
+    UpdateOptions options = information_form(3), plain;
+    options.iterations = plain.iterations = c.iterations;
+    ASSERT_TRUE(filter.update(information, model, y, c.r, options).ok()) << c.what;
+    ASSERT_TRUE(filter.update(ordinary, model, y, c.r, plain).ok()) << c.what;
+    EXPECT_EQ(information.mean, ordinary.mean) << c.what;
+    EXPECT_EQ(information.covariance, ordinary.covariance) << c.what;
+  }
+}
+
+TEST(InformationForm, ANonlinearityBeyondTheLimitFallsBackToTheOrdinaryUpdate) {
+  // The same cross-block nonlinearity: the unexplained spread is far above 1e-6 of R, so with that
+  // limit the update is exactly the ordinary one (its moments come from the same deviations, in
+  // either precision), and with no limit it is not.
+  std::mt19937_64 rng(28);
+  const int n = 4, m = 9;
+  PartlyNonlinearModel model{random_matrix(m, n, rng), {0, 2}};
+  const GaussianXd prior(random_matrix(n, 1, rng) * 0.3, random_spd(n, rng) * 0.3);
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(m, m) * 0.5;
+  const Eigen::VectorXd y = random_matrix(m, 1, rng);
+  for (const bool single : {false, true}) {
+    GaussianXd limited = prior, unlimited = prior, ordinary = prior;
+    S2kf filter(s2kf::compute_lcd_sample_set(n, 41).set);
+    UpdateOptions options = information_form(3), plain;
+    options.single_precision_moments = plain.single_precision_moments = single;
+    ASSERT_TRUE(filter.update(unlimited, model, y, r, options).ok());
+    options.information_form_max_nonlinearity = 1e-6;
+    ASSERT_TRUE(filter.update(limited, model, y, r, options).ok());
+    ASSERT_TRUE(filter.update(ordinary, model, y, r, plain).ok());
+    EXPECT_EQ(limited.mean, ordinary.mean) << single;
+    EXPECT_EQ(limited.covariance, ordinary.covariance) << single;
+    EXPECT_GT((unlimited.mean - ordinary.mean).norm(), 1e-8) << single;
+  }
+}
+
+TEST(InformationForm, TheBlockGateLeavesOutTheOutlyingBlockInEitherPrecision) {
+  // Three sensors of one 3-D state, the middle one far off and one component of the last hidden:
+  // the result is the Kalman update on the kept components.
+  const GaussianXd prior{Eigen::Vector3d(1, -2, 0.5), Eigen::Matrix3d::Identity() * 4.0};
+  LinearModel model{(Eigen::MatrixXd(9, 3) << Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity(),
+                     Eigen::Matrix3d::Identity())
+                        .finished(),
+                    Eigen::VectorXd::Zero(9)};
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(9, 9);
+  Eigen::VectorXd y(9);
+  y << 1.5, -1.0, 0.0, -30.0, 45.0, 25.0, 2.0, -3.0, 1.5;
+  ObservedMask observed = ObservedMask::Constant(9, true);
+  observed(7) = false;
+  for (const bool single : {false, true}) {
+    GaussianXd s = prior, expected = prior;
+    UpdateOptions options = information_form(3);
+    options.block_gate_probability = 0.9999;
+    options.single_precision_moments = single;
+    S2kf filter(s2kf::compute_lcd_sample_set(3, 31).set);
+    const s2kf::UpdateResult result = filter.update(s, model, y, r, observed, options);
+    ASSERT_TRUE(result.ok());
+    ASSERT_EQ(filter.rejected_blocks().size(), 1u);
+    EXPECT_EQ(filter.rejected_blocks()[0], 1);
+    EXPECT_EQ(result.observed, 5);
+    ObservedMask kept = observed;
+    kept.segment(3, 3).setConstant(false);
+    kalman_update(expected, model.h, y, r, kept);
+    const double tolerance = single ? 1e-5 : 1e-10;
+    EXPECT_LT(relative_error(s.mean, expected.mean), tolerance) << (single ? "single" : "double");
+    EXPECT_LT(relative_error(s.covariance, expected.covariance), tolerance) << (single ? "single" : "double");
+  }
+}
+
+TEST(InformationForm, ANoiseBlockThatIsNotPositiveDefiniteIsReportedAndTheStateKept) {
+  std::mt19937_64 rng(27);
+  const int n = 3, m = 6;
+  LinearModel model{random_matrix(m, n, rng), Eigen::VectorXd::Zero(m)};
+  const GaussianXd prior(Eigen::VectorXd::Zero(n), Eigen::MatrixXd::Identity(n, n));
+  Eigen::MatrixXd r = Eigen::MatrixXd::Identity(m, m);
+  r.block(3, 3, 3, 3) = -Eigen::Matrix3d::Identity();
+  GaussianXd s = prior;
+  S2kf filter(s2kf::compute_lcd_sample_set(n, 31).set);
+  const s2kf::UpdateResult result = filter.update(s, model, random_matrix(m, 1, rng), r, information_form(3));
+  EXPECT_EQ(result.status, s2kf::FilterStatus::innovation_not_positive_definite);
+  EXPECT_EQ(s.mean, prior.mean);
+  EXPECT_EQ(s.covariance, prior.covariance);
+}
+
+}  // namespace
