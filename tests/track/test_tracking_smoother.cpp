@@ -89,7 +89,7 @@ TEST(TrackingSmoother, LowersTheErrorAgainstTruthOnTheOccludedHandstand) {
   const Smoothed s = track_and_smooth("handstand_occluded");
   print("filtered", s.filtered);
   print("smoothed", s.smoothed);
-  // Measured 16.3 -> 15.2 deg; 14.8 -> 14.4 since the filter keeps joints off the sine's turning
+  // Measured 16.3 -> 15.2 deg; 14.7 -> 14.3 since the filter keeps joints off the sine's turning
   // point at their limits (a better filter leaves the smoother less to do).
   EXPECT_LT(s.smoothed.segment_orientation_rms_deg, 0.98 * s.filtered.segment_orientation_rms_deg);
   EXPECT_LT(s.smoothed.all_joint_rms_deg, s.filtered.all_joint_rms_deg);
@@ -112,9 +112,9 @@ TEST(TrackingSmoother, StaysOnTheCartwheelThroughPitchNinetyDegrees) {
 
 // The constant-velocity model keeps [pose, rates] and the smoother runs on the whole state with its
 // transition. On the walk it must lower the error; on the cartwheel, whose orientation charts change
-// fastest, it must keep it (measured: walk segments 6.25 -> 6.18 deg, all joints 5.92 -> 5.86,
-// flexion 2.92 -> 2.86; cartwheel segments 10.42 -> 10.33, all joints 7.24 -> 7.11, root
-// 3.63 -> 3.61 deg), and the joints stay in their limits on both. (Before the filter kept joints
+// fastest, it must keep it (measured: walk segments 6.10 -> 6.03 deg, all joints 6.53 -> 6.45,
+// flexion 2.73 -> 2.67; cartwheel segments 10.50 -> 10.44, all joints 7.12 -> 7.01, root
+// 3.60 -> 3.58 deg), and the joints stay in their limits on both. (Before the filter kept joints
 // off the sine's turning point at their limits the filtered walk was worse, 9.06 deg segments
 // and 3.69 flexion, and smoothing took the flexion to 2.97.)
 TEST(TrackingSmoother, WorksWithTheConstantVelocityModel) {
