@@ -18,6 +18,7 @@
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/truth_metrics.hpp>
 
+#include "address_sanitizer.hpp"
 #include "sweep_recording.hpp"
 #include "tracker_samples.hpp"
 
@@ -84,10 +85,33 @@ Verdict compare_bundled(const std::string& name) {
   return compare(name, recording, io::load_motion_csv(base + "_truth.csv"));
 }
 
+// Met on these three since the tracker keeps joints off the sine's turning point at their limits
+// (measured, segments without / with calibration: walk 6.04 / 5.88 deg (before: 7.17 / 8.45),
+// handstand 10.33 / 9.43, occluded handstand 14.71 / 11.66; limb flexion 2.73 / 2.09, 2.89 / 2.78,
+// 4.60 / 3.41). Not yet on the cartwheel (below).
+class CalibrationMet : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CalibrationMet, CalibrationDoesNotMakeTheJointsWorse) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const std::string base = std::string(S2KF_DATA_DIR) + "/" + GetParam();
+  const MarkerSequence recording = c3d::read_c3d(base + ".c3d");
+  const io::MotionTable truth = io::load_motion_csv(base + "_truth.csv");
+  Verdict v;
+  v.plain = track_against_truth(recording, truth, false, 0);
+  v.calibrated =
+      track_against_truth(recording, truth, true, track::CalibrationOptions{}.prior_only_fraction);
+  expect_not_worse_than_no_calibration(v);
+}
+
+INSTANTIATE_TEST_SUITE_P(CalibrationAccuracy, CalibrationMet,
+                         ::testing::Values("walk", "handstand", "handstand_occluded"));
+
 class BundledRecording : public ::testing::TestWithParam<const char*> {};
 
-// Not met yet (docs/tracking.md, "Gauge-aware subject calibration"): run with
-// --gtest_also_run_disabled_tests.
+// Not met yet on every recording (docs/tracking.md, "Gauge-aware subject calibration"): run with
+// --gtest_also_run_disabled_tests. Since joints are kept off their limits' turning point the walk
+// and both handstands pass (walk 6.04 / 5.88 deg segments, handstand 10.33 / 9.43, occluded
+// handstand 14.71 / 11.66, no calibration / calibrated); the cartwheel does not (10.51 / 11.33).
 TEST_P(BundledRecording, DISABLED_CalibrationNeverMakesTheJointsWorse) {
   expect_not_worse_than_no_calibration(compare_bundled(GetParam()));
 }
