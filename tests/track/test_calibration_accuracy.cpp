@@ -98,8 +98,7 @@ TEST_P(CalibrationMet, CalibrationDoesNotMakeTheJointsWorse) {
   const io::MotionTable truth = io::load_motion_csv(base + "_truth.csv");
   Verdict v;
   v.plain = track_against_truth(recording, truth, false, 0);
-  v.calibrated =
-      track_against_truth(recording, truth, true, track::CalibrationOptions{}.prior_only_fraction);
+  v.calibrated = track_against_truth(recording, truth, true, track::CalibrationOptions{}.prior_only_fraction);
   expect_not_worse_than_no_calibration(v);
 }
 

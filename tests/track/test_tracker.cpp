@@ -173,7 +173,7 @@ TEST(Tracker, AJointThatLeavesItsLimitIsFollowed) {
   const Tracked stuck = track_recording(recording, truth, 0, at_limit);
   std::printf("left upper arm: %.2f deg kept inside, %.2f deg without the margin\n", upper_arm_error(kept),
               upper_arm_error(stuck));
-  EXPECT_LT(upper_arm_error(kept), 4.0);  // measured 2.7
+  EXPECT_LT(upper_arm_error(kept), 4.0);   // measured 2.7
   EXPECT_GT(upper_arm_error(stuck), 6.0);  // measured 7.8
   // Over all segments too. Limb flexion is not always better on this uncalibrated walk (knees and
   // elbows that rest at their limits are held 0.5 % of their half range inside); over 24
