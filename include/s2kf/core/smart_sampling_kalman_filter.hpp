@@ -135,9 +135,9 @@ class FilterCore {
                              const Eigen::VectorXd& y, const Eigen::MatrixXd& r, const UpdateOptions& options,
                              UpdateResult result);
 
-  /// UpdateOptions::information_form, after the moments (Cyx and the diagonal blocks of Cyy, R's
-  /// blocks included) and the block gate: the whitened linearisation, the n x n information
-  /// matrix, and the update of `state`.
+  /// UpdateOptions::information_form, after its moments (G^T in regression_, the diagonal blocks
+  /// of Cyy with R's) and the block gate: each block whitened, the n x n information matrix, and
+  /// the update of `state`.
   UpdateResult information_form_gain(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
                                      const Eigen::VectorXd& y, const UpdateOptions& options, UpdateResult result);
 
@@ -155,7 +155,7 @@ class FilterCore {
 
   /// Adds sum_i d_i d_i^T over the columns of `d` (deviations already scaled by sqrt(w)) to the
   /// diagonal blocks of the lower half of `cyy`, blocks being the observed rows of one block of
-  /// `block_size` components (at most kMaxBlock): a product per row and offset within the block,
+  /// `block_size` components: a product per row and offset within the block,
   /// accumulated column by column, instead of the whole m x m rank update.
   template <typename Scalar, typename Deviations>
   void add_diagonal_block_moments(Eigen::Block<Eigen::MatrixXd>& cyy, const Deviations& d,
@@ -435,8 +435,9 @@ S2KF_INLINE FilterCore::FilterCore(SampleSet samples) : samples_(std::move(sampl
   positive_weights_ = (samples_.weights.array() > 0).all();
   sqrt_weights_ = samples_.weights.array().abs().sqrt().matrix();
   {
-    // The information form reads the regression on the state off Cyx alone, which assumes the
-    // samples' own moments are exactly those of N(0, I) (the LCD and UKF sets are corrected to it).
+    // The information form takes the predictions' regression on the whitened state from the unit
+    // samples z_i themselves, which is that regression only when their own moments are exactly
+    // those of N(0, I) (the LCD and UKF sets are corrected to it).
     const Eigen::Index n = samples_.dimension();
     const Eigen::VectorXd first = samples_.points * samples_.weights;
     const Eigen::MatrixXd second =
