@@ -139,7 +139,8 @@ class FilterCore {
   /// of Cyy with R's) and the block gate: each block whitened, the n x n information matrix, and
   /// the update of `state`.
   UpdateResult information_form_gain(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
-                                     const Eigen::VectorXd& y, const UpdateOptions& options, UpdateResult result);
+                                     const Eigen::VectorXd& y, const UpdateOptions& options,
+                                     UpdateResult result);
 
   /// Copies the lower half of posterior_covariance_ into its upper half and factorises it (into
   /// factor_): whether the posterior is positive definite.
@@ -168,11 +169,13 @@ class FilterCore {
     for (Eigen::Index i = 0; i < d.cols(); ++i) {
       const auto column = d.col(i);
       for (Eigen::Index s = 0; s < block_size && s < mo; ++s)
-        products.col(s).head(mo - s).array() += column.head(mo - s).array() * column.segment(s, mo - s).array();
+        products.col(s).head(mo - s).array() +=
+            column.head(mo - s).array() * column.segment(s, mo - s).array();
     }
     for (Eigen::Index k = 0; k < mo; ++k)
       for (Eigen::Index s = 0; s < block_size && k + s < mo; ++s)
-        if (index_(k + s) / block_size == index_(k) / block_size) cyy(k + s, k) += static_cast<double>(products(k, s));
+        if (index_(k + s) / block_size == index_(k) / block_size)
+          cyy(k + s, k) += static_cast<double>(products(k, s));
   }
 
   /// After the system model's evaluation (in propagated_): the predicted mean and covariance.
@@ -447,9 +450,10 @@ S2KF_INLINE FilterCore::FilterCore(SampleSet samples) : samples_(std::move(sampl
   }
   detect_symmetry();
   if (unit_moments_ && positive_weights_) {
-    scaled_points_ = symmetric_ ? Eigen::MatrixXd(samples_.points.middleCols(origin_count_, half_count_) *
-                                                  sqrt_weights_.segment(origin_count_, half_count_).asDiagonal())
-                                : Eigen::MatrixXd(samples_.points * sqrt_weights_.asDiagonal());
+    scaled_points_ = symmetric_
+                         ? Eigen::MatrixXd(samples_.points.middleCols(origin_count_, half_count_) *
+                                           sqrt_weights_.segment(origin_count_, half_count_).asDiagonal())
+                         : Eigen::MatrixXd(samples_.points * sqrt_weights_.asDiagonal());
     scaled_points_f_ = scaled_points_.cast<float>();
   }
 }
@@ -533,7 +537,8 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
     // Only the diagonal blocks of Cyy (and of R) are needed.
     const Eigen::Index b = options.block_size;
     for (Eigen::Index j = 0; j < mo; ++j)
-      for (Eigen::Index i = j; i < mo && index_(i) / b == index_(j) / b; ++i) cyy(i, j) = r(index_(i), index_(j));
+      for (Eigen::Index i = j; i < mo && index_(i) / b == index_(j) / b; ++i)
+        cyy(i, j) = r(index_(i), index_(j));
     accumulate_information_moments(cyy, single, b);
     if (information_form_nonlinearity(r, b) <= options.information_form_max_nonlinearity) {
       if (options.block_gate_probability > 0) result.observed = reject_outlying_blocks(y, options, true);
@@ -583,8 +588,9 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
 }
 
 S2KF_INLINE bool FilterCore::information_form_applies(const Eigen::MatrixXd& r,
-                                                       const UpdateOptions& options) const {
-  if (!options.information_form || !positive_weights_ || !unit_moments_ || options.iterations > 1) return false;
+                                                      const UpdateOptions& options) const {
+  if (!options.information_form || !positive_weights_ || !unit_moments_ || options.iterations > 1)
+    return false;
   // R must not couple the blocks: the information form keeps only its diagonal blocks. Checked
   // on the whole of R below each block, column by column, as an OR of the entries' bits without
   // the sign (so -0 counts as zero): an integer reduction the compiler vectorises.
@@ -614,14 +620,16 @@ S2KF_INLINE double FilterCore::information_form_nonlinearity(const Eigen::Matrix
       noise += variance;
       unexplained += cyy_(k, k) - variance - gt.col(k).squaredNorm();
     }
-    if (!(unexplained <= largest * noise)) largest = noise > 0 ? unexplained / noise : std::numeric_limits<double>::infinity();
+    if (!(unexplained <= largest * noise))
+      largest = noise > 0 ? unexplained / noise : std::numeric_limits<double>::infinity();
   }
   return largest;
 }
 
 S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::VectorXd> mean,
                                                            Eigen::Ref<Eigen::MatrixXd> covariance,
-                                                           const Eigen::VectorXd& y, const UpdateOptions& options,
+                                                           const Eigen::VectorXd& y,
+                                                           const UpdateOptions& options,
                                                            UpdateResult result) {
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
   const Eigen::Index n = mean.size(), mo = result.observed, b = options.block_size;
@@ -853,7 +861,8 @@ S2KF_INLINE void FilterCore::accumulate_information_moments(Eigen::Block<Eigen::
                                                             bool single_precision, Eigen::Index block_size) {
   const Eigen::Index mo = observed_count_, n = samples_.dimension(), count = samples_.count();
   auto y_dev = y_dev_.topRows(mo);
-  if (regression_.rows() != n || regression_.cols() < mo) regression_.resize(n, std::max(regression_.cols(), mo));
+  if (regression_.rows() != n || regression_.cols() < mo)
+    regression_.resize(n, std::max(regression_.cols(), mo));
   auto regression = regression_.leftCols(mo);
   // Pairs +z_k, -z_k with equal weights: sum over a pair of w z (y_i - y^)^T is
   // w z_k (y+_k - y-_k)^T, so G^T costs half the product over all samples.
