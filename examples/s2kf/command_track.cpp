@@ -99,6 +99,10 @@ const RegisterCommand track_registration{
       app.add_option("--calibration-frames", settings->calibration_frames,
                      "frames the calibration uses, in stretches spread over the recording (default 1200)")
           ->check(CLI::Range(10, 10000000));
+      app.add_option("--calibration-samples", settings->calibration_samples,
+                     "S2KF sample count of the calibration's tracking pass (default: --samples; fewer are "
+                     "faster but move the calibration, docs/benchmarks.md)")
+          ->check(CLI::Range(3, 100001));
       app.add_option("--calibration-shrink", settings->calibration_shrink,
                      "pull the marker offsets the recording sees only weakly towards the marker set: "
                      "a direction keeps mu / (mu + C) of the data's step (default 0.03; 0: none)")

@@ -74,6 +74,10 @@ std::pair<body::BodyModel, track::MarkerMapping> tracked_model(const std::string
     if (!calibration.is_object() || !calibration["frames"].is_number_integer())
       throw UserError(where + ": \"calibration\" has no frame count");
     options.calibration_frames = calibration["frames"].get<std::int64_t>();
+    // Summaries written before the calibration had a sample set of its own have no count: it
+    // tracked with the tracker's.
+    if (calibration["samples"].is_number_integer())
+      options.calibration_samples = cached_sample_set(46, calibration["samples"].get<int>());
   }
   track::Session session;
   try {

@@ -126,6 +126,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   session_options.calibration.weak_direction_shrink = settings.calibration_shrink;
   session_options.calibration.threads = settings.calibration_threads;
   const SampleSet samples = cached_sample_set(46, session_options.tracker.samples);
+  if (session_options.calibrate && settings.calibration_samples > 0 &&
+      settings.calibration_samples != session_options.tracker.samples)
+    session_options.calibration_samples = cached_sample_set(46, settings.calibration_samples);
   track::Session session;
   try {
     session = track::prepare_session(*source, choice.set, session_options, samples);

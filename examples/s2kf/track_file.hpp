@@ -20,7 +20,7 @@ struct TrackSettings {
   double height_mm = 0;  // 0: estimate
   int samples = 0;       // 0: the preset's
   std::string preset = "default";
-  std::string motion_model;  // empty: the preset's
+  std::string motion_model;          // empty: the preset's
   std::string gain = "square-root";  // or information-form (TrackerOptions::information_form_update)
   std::string method = "s2kf";
   std::string markerset;  // empty: the bundled set that matches best
@@ -28,6 +28,7 @@ struct TrackSettings {
   bool calibrate = true;  // calibrate the subject on the recording first (not with --subject)
   int calibration_frames = 1200;
   double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
+  int calibration_samples = 0;  // the calibration's tracking pass; 0: the tracker's samples
   int calibration_threads = 1;  // set by run_track: every core for one recording, 1 in a batch
   bool smooth = false;
   long figure_frame = -1;  // >= 0: draw this frame

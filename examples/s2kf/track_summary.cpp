@@ -34,6 +34,7 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
   if (session.calibration)
     calibration = {
         {"frames", session.calibration_frames},
+        {"samples", session.calibration_sample_count},
         {"stretches", session.calibration_stretches},
         {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
         {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},

@@ -198,14 +198,18 @@ TEST(TrackCommand, CalibratesByDefaultAndLowersTheMarkerDistance) {
   EXPECT_LT(number_after("mean_marker_distance_after_mm"),
             0.8 * number_after("mean_marker_distance_before_mm"));
   EXPECT_EQ(number_after("weak_direction_shrink"), 0.03);  // the default, recorded
-  // --calibration-shrink 0 estimates every direction the data see freely: another subject.
+  EXPECT_EQ(nlohmann::json::parse(summary)["calibration"]["samples"].get<int>(), 301);  // the tracker's
+  // --calibration-shrink 0 estimates every direction the data see freely: another subject, here
+  // also with a calibration pass of its own sample count.
   const fs::path free = scratch("calibrated") / "free";
-  const CommandResult unshrunk =
-      run_command("track " + data_file("handstand.c3d") +
-                  " --calibration-frames 300 --calibration-shrink 0 --formats csv --out " + free.string());
+  const CommandResult unshrunk = run_command("track " + data_file("handstand.c3d") +
+                                             " --calibration-frames 300 --calibration-shrink 0 "
+                                             "--calibration-samples 93 --formats csv --out " +
+                                             free.string());
   ASSERT_EQ(unshrunk.status, 0) << unshrunk.output;
   const auto free_summary = nlohmann::json::parse(read_text(free.string() + ".json"));
   EXPECT_EQ(free_summary["calibration"]["weak_direction_shrink"].get<double>(), 0.0);
+  EXPECT_EQ(free_summary["calibration"]["samples"].get<int>(), 93);
   EXPECT_NE(free_summary["calibration"]["segment_scale"].dump(),
             nlohmann::json::parse(summary)["calibration"]["segment_scale"].dump());
 }

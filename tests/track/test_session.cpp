@@ -226,7 +226,9 @@ TEST(StateChart, JointParametersAreKeptWhereTheMarkersCanMoveThem) {
       EXPECT_NEAR(covariance(k, k), 0.25, 1e-12) << k;
     }
   }
-  const auto correlation = [](const Eigen::MatrixXd& c, int i, int j) { return c(i, j) / std::sqrt(c(i, i) * c(j, j)); };
+  const auto correlation = [](const Eigen::MatrixXd& c, int i, int j) {
+    return c(i, j) / std::sqrt(c(i, i) * c(j, j));
+  };
   EXPECT_NEAR(correlation(covariance, 9, 2), correlation(covariance_before, 9, 2), 1e-12);
   EXPECT_NEAR(correlation(covariance, 9, 7), correlation(covariance_before, 9, 7), 1e-12);
   EXPECT_EQ(covariance.topLeftCorner(6, 6), covariance_before.topLeftCorner(6, 6));
@@ -237,6 +239,50 @@ TEST(StateChart, JointParametersAreKeptWhereTheMarkersCanMoveThem) {
   track::keep_joint_parameters_learnable(same, same_covariance, 0, 0);
   EXPECT_EQ(same, before);
   EXPECT_EQ(same_covariance, covariance_before);
+}
+
+// The calibration's tracking pass can take its own, smaller sample set: the bundle adjustment
+// refines the poses that pass starts it from, so on this recording the subject fits as well.
+TEST(Session, CalibrationTracksWithItsOwnSampleSet) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const MarkerSequence head = c3d::read_c3d(data_file("handstand.c3d")).frames(0, 200);
+  SequenceFrameSource source(head);
+  track::SessionOptions options;
+  options.height_mm = 1705;
+  const SampleSet& samples = test::tracker_samples();
+  const track::Session own = track::prepare_session(source, kit_like_set(), options, samples);
+  options.calibration_samples = test::tracker_samples(93);
+  const track::Session small = track::prepare_session(source, kit_like_set(), options, samples);
+  ASSERT_TRUE(own.calibration.has_value());
+  ASSERT_TRUE(small.calibration.has_value());
+  EXPECT_EQ(own.calibration_sample_count, samples.count());
+  EXPECT_EQ(small.calibration_sample_count, 93);
+  // Another pass, so another start for the bundle adjustment: the subject moves a little...
+  double largest_change = 0;
+  for (int m = 0; m < own.model.marker_count(); ++m)
+    largest_change =
+        std::max(largest_change, (own.model.markers[m].offset - small.model.markers[m].offset).norm());
+  EXPECT_GT(largest_change, 0.0);
+  EXPECT_LT(largest_change, 1.0);  // mm; measured 0.06
+  // ...and both fit the recording about as well (same tracker, 301 samples, over the 200 frames).
+  const track::TrackingRun own_run = track::run_session(own, source, samples);
+  const track::TrackingRun small_run = track::run_session(small, source, samples);
+  const double own_mm = track::mean_from(own_run.mean_marker_distance, 20);
+  const double small_mm = track::mean_from(small_run.mean_marker_distance, 20);
+  EXPECT_LT(own_mm, 7.0);  // measured 5.20 mm, both
+  EXPECT_LT(small_mm, 1.01 * own_mm) << own_mm;
+
+  // A set for another dimension is refused with a sentence, calibration failures allowed or not.
+  options.calibration_samples.points = Eigen::MatrixXd::Zero(10, 40);
+  options.calibration_samples.weights = Eigen::VectorXd::Constant(40, 1.0 / 40);
+  try {
+    track::prepare_session(source, kit_like_set(), options, samples);
+    FAIL() << "a 10-dimensional calibration sample set was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("calibration's sample set has 10 dimensions but the tracker's 46"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // Calibration reads the whole of a short recording, and spread stretches of a long one.

@@ -83,7 +83,9 @@ class ViewerPage : public ::testing::Test {
                     " --height " + std::to_string(kHeightMm) + " --truth " + truth_ + " --html --quiet");
     ASSERT_EQ(plain.status, 0) << plain.output;
     calibrated_ = (kWork / "calibrated").string();
-    const auto calibrated = run_command("track " + recording_ + " --out " + calibrated_ + " --html --quiet");
+    // A calibration pass with a sample count of its own, which `s2kf view` must read back.
+    const auto calibrated = run_command("track " + recording_ + " --out " + calibrated_ +
+                                        " --calibration-samples 93 --html --quiet");
     ASSERT_EQ(calibrated.status, 0) << calibrated.output;
     unavailable_ = s2kf::test_support::chromium_unavailable_reason(kWork);
   }

@@ -70,6 +70,12 @@ struct SessionOptions {
     options.final_pass = false;  // the run's own first frames give the calibrated distance
     return options;
   }();
+  /// The sample set of the calibration's tracking pass; empty (no points): the tracker's own. That
+  /// pass gives the bundle adjustment its starting poses and decides which residuals it leaves out
+  /// as outliers, so a smaller set is faster but can land the calibration elsewhere: 93 samples
+  /// instead of 301 made it better on simulated subjects and up to 30 % worse in marker distance on
+  /// real recordings (docs/benchmarks.md), hence the tracker's set by default.
+  SampleSet calibration_samples;
   /// A calibration that cannot be done (too few usable frames) leaves the marker set as it is with
   /// a warning (true), or is an error (false: `s2kf calibrate`).
   bool calibration_may_fail = true;
@@ -90,6 +96,7 @@ struct Session {
       height_source;  ///< "given", "from the marker-set file", "estimated from N rigid marker pairs", ...
   std::optional<SubjectCalibration> calibration;  ///< when calibrated
   std::int64_t calibration_frames = 0;            ///< frames the calibration used
+  Eigen::Index calibration_sample_count = 0;      ///< samples of the calibration's tracking pass
   /// The stretches of the recording it used: (first frame, frame count).
   std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches;
   std::vector<std::string> warnings;  ///< the marker set's and the preparation's
@@ -211,6 +218,12 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
   session.model = model.scaled(session.height_mm);
 
   if (options.calibrate) {
+    const SampleSet& calibration_samples =
+        options.calibration_samples.count() > 0 ? options.calibration_samples : samples;
+    if (calibration_samples.dimension() != samples.dimension())
+      throw std::invalid_argument("the calibration's sample set has " +
+                                  std::to_string(calibration_samples.dimension()) +
+                                  " dimensions but the tracker's " + std::to_string(samples.dimension()));
     CalibrationOptions calibration = options.calibration;
     calibration.marker_weight = calibration_weights(set, session.tracker.marker_noise_mm);
     session.calibration_stretches =
@@ -231,9 +244,10 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
         frames.visible.rightCols(stretch.frame_count()) = stretch.visible;
       }
       session.calibration_frames = frames.frame_count();
+      session.calibration_sample_count = calibration_samples.count();
       const auto start = std::chrono::steady_clock::now();
-      session.calibration =
-          calibrate_subject(session.model, session.mapping, session.tracker, frames, samples, calibration);
+      session.calibration = calibrate_subject(session.model, session.mapping, session.tracker, frames,
+                                              calibration_samples, calibration);
       session.times.calibration = seconds_since(start);
       session.model = session.calibration->model;
     } catch (const std::invalid_argument& e) {
@@ -241,6 +255,7 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
         throw std::invalid_argument(std::string("calibration failed: ") + e.what());
       session.calibration.reset();
       session.calibration_frames = 0;
+      session.calibration_sample_count = 0;
       session.calibration_stretches.clear();
       session.warnings.push_back(std::string("subject not calibrated (calibration failed: ") + e.what() +
                                  "); the marker set is used as it is");
