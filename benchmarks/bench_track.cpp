@@ -11,9 +11,12 @@ namespace {
 
 using namespace track_bench;
 
-// One steady-state frame: prediction, sampling, batched FK, moments, gain, update, re-centring and
-// the reported pose, markers and distances (Tracker::process). Counters: floor_us (the floor at
-// this L and visible count, median of 30 in this process) and x_floor (this step / floor).
+// One steady-state frame with the default options: prediction, sampling, batched FK, moments, gain
+// (information form), update, re-centring and the reported pose, markers and distances
+// (Tracker::process). Counters, each floor the median of 30 in this process at this L and visible
+// count: floor_us (FK + the rank-L update of the whole innovation covariance) and x_floor (this
+// step / floor); regression_floor_us (FK + the regression G^T, the least a linear-regression
+// filter does) and x_regression_floor.
 void BM_TrackStep(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));
   const int visible = static_cast<int>(state.range(1));
@@ -37,6 +40,9 @@ void BM_TrackStep(benchmark::State& state) {
   const double floor_seconds = median_seconds(30, [&] { floor.run(); });
   state.counters["floor_us"] = 1e6 * floor_seconds;
   state.counters["x_floor"] = step / floor_seconds;
+  const double regression_floor_seconds = median_seconds(30, [&] { floor.run_regression(); });
+  state.counters["regression_floor_us"] = 1e6 * regression_floor_seconds;
+  state.counters["x_regression_floor"] = step / regression_floor_seconds;
   state.counters["failed_updates"] = static_cast<double>(failures);
 }
 BENCHMARK(BM_TrackStep)->Apply(add_args);
@@ -65,15 +71,15 @@ void BM_TrackStepDouble(benchmark::State& state) {
 }
 BENCHMARK(BM_TrackStepDouble)->Apply(add_args);
 
-// The same step with the gain in information form (TrackerOptions::information_form_update): each
-// marker's 3 x 3 block of Cyy and a 46 x 46 system instead of the whole Cyy, its Cholesky factor
-// and the solves with it (frames whose samples are too nonlinear still take the ordinary update).
-void BM_TrackStepInformationForm(benchmark::State& state) {
+// The same step with the ordinary (square-root) gain (TrackerOptions::information_form_update
+// off): the whole innovation covariance Cyy, its Cholesky factor and the solves with it, instead
+// of each body part's block of Cyy and the 46 x 46 information matrix.
+void BM_TrackStepSquareRoot(benchmark::State& state) {
   track::TrackerOptions options;
-  options.information_form_update = true;
+  options.information_form_update = false;
   run_step_with(state, options);
 }
-BENCHMARK(BM_TrackStepInformationForm)->Apply(add_args);
+BENCHMARK(BM_TrackStepSquareRoot)->Apply(add_args);
 
 // The same step with the constant-velocity model (92-state prediction, the 46-dimensional sampled
 // update, the rates conditioned on it): the latency it adds at the same L.
@@ -103,6 +109,14 @@ void BM_Floor(benchmark::State& state) {
   for (auto _ : state) floor.run();
 }
 BENCHMARK(BM_Floor)->Apply(add_args);
+
+void BM_FloorRegression(benchmark::State& state) {
+  const int samples = static_cast<int>(state.range(0));
+  const int visible = static_cast<int>(state.range(1));
+  Floor floor(converged_state(samples), lcd_sample_set(46, samples).set, visible);
+  for (auto _ : state) floor.regression();
+}
+BENCHMARK(BM_FloorRegression)->Apply(add_args);
 
 void BM_FloorSinglePoseFk(benchmark::State& state) {
   const int samples = static_cast<int>(state.range(0));

@@ -133,14 +133,17 @@ double median_seconds(int reps, F&& f) {
   return t[reps / 2];
 }
 
-/// The floor: the work no sampling step can avoid, each part by the fastest kernel the project
-/// has and in the precision the tracker uses for it: the batched FK of the L samples (the
+/// The floors: the work no sampling step can avoid, each part by the fastest kernel the project
+/// has and in the precision the tracker uses for it. run(): the batched FK of the L samples (the
 /// measurement model on the whole block, double) and one symmetric rank-L update of the
-/// (3 visible)^2 covariance of the predicted markers (single). Returns seconds (median of `reps`).
+/// (3 visible)^2 covariance of the predicted markers (single), the floor of an update that forms
+/// the whole innovation covariance. run_regression(): the same FK and the regression of the
+/// predictions on the unit samples, G^T = sum over the L/2 pairs of z_k (y+_k - y-_k)^T (single),
+/// the least any linear-regression Kalman filter must do (it needs the cross-covariance at least).
 struct Floor {
   std::vector<body::Pose> poses;
   Eigen::MatrixXd x, y;
-  Eigen::MatrixXf deviations, cyy;
+  Eigen::MatrixXf deviations, cyy, unit_half, pair_difference, regression_t;
   body::MarkerMeasurementModel h;
   body::BodyModel model;
 
@@ -153,6 +156,10 @@ struct Floor {
     d.colwise() -= d.rowwise().mean();
     deviations = d.cast<float>();
     cyy = Eigen::MatrixXf::Identity(deviations.rows(), deviations.rows());
+    const Eigen::Index h = set.count() / 2, o = set.count() % 2;
+    unit_half = set.points.middleCols(o, h).cast<float>();
+    pair_difference = deviations.middleCols(o, h) - deviations.rightCols(h);
+    regression_t.resize(unit_half.rows(), deviations.rows());
   }
   void fk() {
     h(x, y);
@@ -169,9 +176,17 @@ struct Floor {
     cyy.selfadjointView<Eigen::Lower>().rankUpdate(deviations);
     benchmark::DoNotOptimize(cyy.data());
   }
+  void regression() {
+    regression_t.noalias() = unit_half * pair_difference.transpose();
+    benchmark::DoNotOptimize(regression_t.data());
+  }
   void run() {
     fk();
     rank_update();
+  }
+  void run_regression() {
+    fk();
+    regression();
   }
 };
 

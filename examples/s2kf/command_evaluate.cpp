@@ -46,8 +46,9 @@ const RegisterCommand evaluate_registration{
                      "S2KF system model: random-walk (default) or constant-velocity")
           ->check(CLI::IsMember({"random-walk", "constant-velocity"}));
       app.add_option("--gain", settings->gain,
-                     "S2KF update: square-root (default: the whole innovation covariance factorised) or "
-                     "information-form (each marker's 3 x 3 block and the 46 x 46 state system)")
+                     "S2KF update: information-form (default: the 46 x 46 state system and each body "
+                     "part's block of the innovation covariance) or square-root (the whole innovation "
+                     "covariance factorised)")
           ->check(CLI::IsMember({"information-form", "square-root"}));
       app.add_flag("--smooth", settings->smooth,
                    "also track with the RTS smoother and compare it with the truth");

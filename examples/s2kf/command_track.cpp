@@ -84,9 +84,9 @@ const RegisterCommand track_registration{
                      "S2KF system model: random-walk (default) or constant-velocity (docs/tracking.md)")
           ->check(CLI::IsMember({"random-walk", "constant-velocity"}));
       app.add_option("--gain", settings->gain,
-                     "S2KF update: square-root (default: the whole innovation covariance factorised) or "
-                     "information-form (each marker's 3 x 3 block and the 46 x 46 state system; faster, "
-                     "docs/benchmarks.md)")
+                     "S2KF update: information-form (default: the 46 x 46 state system and each body "
+                     "part's block of the innovation covariance) or square-root (the whole innovation "
+                     "covariance factorised; slower, docs/benchmarks.md)")
           ->check(CLI::IsMember({"information-form", "square-root"}));
       app.add_option("--method", settings->method, "s2kf, or baseline (per-frame Levenberg-Marquardt)")
           ->check(CLI::IsMember({"s2kf", "baseline"}));

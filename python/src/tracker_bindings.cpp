@@ -19,6 +19,7 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -137,9 +138,11 @@ void bind_tracker(py::module_& module) {
                              [](const StreamingTracker& t) { return t.tracker().model().joint_names(); })
       .def_property_readonly("markers_used",
                              [](const StreamingTracker& t) {
+                               // In the model's order (the tracker stacks them by body part).
+                               std::vector<int> used = t.tracker().used_markers();
+                               std::sort(used.begin(), used.end());
                                std::vector<std::string> names;
-                               for (int m : t.tracker().used_markers())
-                                 names.push_back(t.tracker().model().markers[m].name);
+                               for (int m : used) names.push_back(t.tracker().model().markers[m].name);
                                return names;
                              })
       .def_property_readonly("ignored_labels",

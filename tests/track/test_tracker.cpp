@@ -30,6 +30,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -38,10 +39,12 @@
 #include <functional>
 #include <iomanip>
 #include <limits>
+#include <numeric>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "address_sanitizer.hpp"
 
@@ -267,6 +270,38 @@ TEST(Tracker, RejectsOptionsAndMappingsThatCannotWork) {
   EXPECT_THROW(track::Tracker(model, mapping, bad, 100, test::tracker_samples()), std::invalid_argument);
   EXPECT_THROW(track::Tracker(model, mapping, {}, 0, test::tracker_samples()), std::invalid_argument);
   EXPECT_THROW(track::preset_options("fast", 100), std::invalid_argument);
+}
+
+TEST(Tracker, TheMeasurementStacksTheMarkersBodyPartByBodyPart) {
+  // The information form's groups must be consecutive: the pelvis, the spine with the chest, the
+  // head, each arm and each leg, every marker once, the model's order within a part.
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const auto mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const track::Tracker tracker(model, mapping, {}, 100, test::tracker_samples());
+  const std::vector<int>& used = tracker.used_markers();
+  std::vector<int> sorted = used;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<int> all(static_cast<std::size_t>(model.marker_count()));
+  std::iota(all.begin(), all.end(), 0);
+  ASSERT_EQ(sorted, all);
+  // Each marker's part by the names of the model's joints: the first letters of the joint whose
+  // rotation ends in the marker's frame (root; BP/BT; BLN/BUN; LS/LE/LW; ...).
+  const auto part = [&](int marker) -> std::string {
+    const std::string joint = model.frame_name(model.markers[static_cast<std::size_t>(marker)].frame);
+    if (joint == "root") return "pelvis";
+    if (joint.rfind("BP", 0) == 0 || joint.rfind("BT", 0) == 0) return "spine";
+    if (joint.rfind("BLN", 0) == 0 || joint.rfind("BUN", 0) == 0) return "head";
+    const bool arm = joint[1] == 'S' || joint[1] == 'E' || joint[1] == 'W';
+    return std::string(1, joint[0]) + (arm ? " arm" : " leg");
+  };
+  std::vector<std::string> runs;
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    if (k == 0 || part(used[k]) != part(used[k - 1])) runs.push_back(part(used[k]));
+    if (k > 0 && part(used[k]) == part(used[k - 1])) EXPECT_LT(used[k - 1], used[k]);
+  }
+  std::vector<std::string> parts = runs;
+  std::sort(parts.begin(), parts.end());
+  EXPECT_EQ(parts, (std::vector<std::string>{"L arm", "L leg", "R arm", "R leg", "head", "pelvis", "spine"}));
 }
 
 TEST(Tracker, FramesBeforeEnoughMarkersAreReportedAsNotTracked) {

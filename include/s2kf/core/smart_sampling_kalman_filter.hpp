@@ -73,6 +73,14 @@ struct UpdateOptions {
   /// spreads (|Omega_ij| <= sqrt(Omega_ii Omega_jj)), so below the limit they are small against R.
   /// Infinity: never fall back.
   double information_form_max_nonlinearity = std::numeric_limits<double>::infinity();
+  /// The information form's groups: one id per measurement component, for measurements whose
+  /// blocks' nonlinear parts are correlated in known groups (the markers of one limb all move with
+  /// its shoulder or hip). D is then block-diagonal by group instead of by block: the correlation
+  /// within a group is kept and only that between groups is left out, so with one group for the
+  /// whole measurement the update is the ordinary one. Ids must not decrease along the components
+  /// (a group's components are consecutive), and each block of `block_size` must lie in one
+  /// group. Null: every block is a group of its own. Read during update() only.
+  const std::vector<int>* information_groups = nullptr;
 };
 
 struct UpdateResult {
@@ -126,6 +134,17 @@ class FilterCore {
       if (observed(i)) index_(observed_count_++) = i;
   }
 
+  /// The information form's group of a measurement component (UpdateOptions::information_groups,
+  /// else its block), as set by begin_update.
+  Eigen::Index group_of(Eigen::Index component) const {
+    return groups_ != nullptr ? (*groups_)[static_cast<std::size_t>(component)]
+                              : component / group_block_size_;
+  }
+
+  /// Checks UpdateOptions::information_groups against the measurement and keeps them, with the
+  /// largest group's size, for group_of and the moments.
+  void set_groups(Eigen::Index m, const UpdateOptions& options);
+
   /// The checks of update() and the observed components; a status other than ok ends the update.
   UpdateResult begin_update(Eigen::Index state_dimension, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
                             const ObservedMask& observed, const UpdateOptions& options);
@@ -155,26 +174,39 @@ class FilterCore {
   bool information_form_applies(const Eigen::MatrixXd& r, const UpdateOptions& options) const;
 
   /// Adds sum_i d_i d_i^T over the columns of `d` (deviations already scaled by sqrt(w)) to the
-  /// diagonal blocks of the lower half of `cyy`, blocks being the observed rows of one block of
-  /// `block_size` components: a product per row and offset within the block,
-  /// accumulated column by column, instead of the whole m x m rank update.
+  /// diagonal blocks of the lower half of `cyy`, blocks being the observed rows of one group
+  /// (group_of) instead of the whole m x m rank update. Small groups (a marker's x, y, z): a
+  /// product per row and offset within the group, accumulated column by column; larger ones (a
+  /// limb's markers): one rank update per group.
   template <typename Scalar, typename Deviations>
   void add_diagonal_block_moments(Eigen::Block<Eigen::MatrixXd>& cyy, const Deviations& d,
-                                  Eigen::Index block_size,
                                   Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& products) const {
-    const Eigen::Index mo = d.rows();
-    if (products.rows() < mo || products.cols() < block_size)
-      products.resize(std::max(products.rows(), mo), std::max(products.cols(), block_size));
-    products.topLeftCorner(mo, block_size).setZero();
+    const Eigen::Index mo = d.rows(), width = group_width_;
+    if (products.rows() < mo || products.cols() < width)
+      products.resize(std::max(products.rows(), mo), std::max(products.cols(), width));
+    if (width > kMaxBlock) {
+      for (Eigen::Index k = 0; k < mo;) {
+        Eigen::Index end = k;
+        while (end < mo && group_of(index_(end)) == group_of(index_(k))) ++end;
+        auto block = products.topLeftCorner(end - k, end - k);
+        block.setZero();
+        block.template selfadjointView<Eigen::Lower>().rankUpdate(d.middleRows(k, end - k));
+        for (Eigen::Index j = 0; j < end - k; ++j)
+          for (Eigen::Index i = j; i < end - k; ++i) cyy(k + i, k + j) += static_cast<double>(block(i, j));
+        k = end;
+      }
+      return;
+    }
+    products.topLeftCorner(mo, width).setZero();
     for (Eigen::Index i = 0; i < d.cols(); ++i) {
       const auto column = d.col(i);
-      for (Eigen::Index s = 0; s < block_size && s < mo; ++s)
+      for (Eigen::Index s = 0; s < width && s < mo; ++s)
         products.col(s).head(mo - s).array() +=
             column.head(mo - s).array() * column.segment(s, mo - s).array();
     }
     for (Eigen::Index k = 0; k < mo; ++k)
-      for (Eigen::Index s = 0; s < block_size && k + s < mo; ++s)
-        if (index_(k + s) / block_size == index_(k) / block_size)
+      for (Eigen::Index s = 0; s < width && k + s < mo; ++s)
+        if (group_of(index_(k + s)) == group_of(index_(k)))
           cyy(k + s, k) += static_cast<double>(products(k, s));
   }
 
@@ -234,14 +266,13 @@ class FilterCore {
 
   /// The largest trace(C_b - G_b G_b^T) / trace(R_b) over the observed blocks, after
   /// accumulate_information_moments (see UpdateOptions::information_form_max_nonlinearity).
-  double information_form_nonlinearity(const Eigen::MatrixXd& r, Eigen::Index block_size) const;
+  double information_form_nonlinearity(const Eigen::MatrixXd& r) const;
 
-  /// UpdateOptions::information_form: adds the diagonal blocks (of `block_size`) of
+  /// UpdateOptions::information_form: adds the diagonal blocks (one per group) of
   /// sum w (y_i - y^)(y_i - y^)^T to those of `cyy`, and sets regression_ (n x observed) to
   /// G^T = sum w z_i (y_i - y^)^T, the predictions' regression on the whitened state (the samples
   /// z_i of N(0, I) themselves, so no solve with the prior's factor is needed).
-  void accumulate_information_moments(Eigen::Block<Eigen::MatrixXd>& cyy, bool single_precision,
-                                      Eigen::Index block_size);
+  void accumulate_information_moments(Eigen::Block<Eigen::MatrixXd>& cyy, bool single_precision);
 
   /// The top-left rows x cols of a single-precision scratch matrix, grown when needed.
   static Eigen::Block<Eigen::MatrixXf> single_buffer(Eigen::MatrixXf& buffer, Eigen::Index rows,
@@ -261,6 +292,37 @@ class FilterCore {
   Eigen::Index reject_outlying_blocks(const Eigen::VectorXd& y, const UpdateOptions& options,
                                       bool diagonal_blocks = false);
   static constexpr int kMaxBlock = 6;
+
+  /// Sizes the moments' buffers for every component of an m-dimensional measurement, those of the
+  /// ordinary update and, with `information_form`, those of the information form as well: a later
+  /// frame with more components observed, or one whose samples are too nonlinear for the
+  /// information form, then allocates nothing.
+  void reserve_moment_buffers(Eigen::Index m, Eigen::Index n, bool single_precision, bool information_form) {
+    cyy_buffer(m);
+    cyx_buffer(m, n);
+    const Eigen::Index count = samples_.count(), h = half_count_;
+    if (single_precision) {
+      single_buffer(y_dev_f_, m, count);
+      single_buffer(cyy_f_, m, m);
+      single_buffer(cyx_f_, m, n);
+      if (symmetric_) {
+        single_buffer(pair_difference_f_, m, h);
+        single_buffer(half_deviation_f_, n, h);
+      }
+    }
+    if (!information_form) return;
+    if (regression_.rows() != n || regression_.cols() < m)
+      regression_.resize(n, std::max(regression_.cols(), m));
+    Eigen::MatrixXd& products = block_products_;
+    Eigen::MatrixXf& products_f = block_products_f_;
+    if (products.rows() < m || products.cols() < group_width_) products.resize(m, group_width_);
+    if (single_precision) {
+      single_buffer(regression_f_, n, m);
+      if (products_f.rows() < m || products_f.cols() < group_width_) products_f.resize(m, group_width_);
+    }
+    if (group_width_ > kMaxBlock && group_covariance_.rows() < group_width_)
+      group_covariance_.resize(group_width_, group_width_);
+  }
 
   Eigen::Block<Eigen::MatrixXd> cyy_buffer(Eigen::Index mo) {
     if (cyy_.rows() < mo) cyy_.resize(mo, mo);
@@ -322,6 +384,10 @@ class FilterCore {
   Eigen::Index observed_count_ = 0;
   bool direct_ = false;  ///< the model writes straight into y_dev_ (see prepare_predictions)
   std::vector<Eigen::Index> rejected_blocks_;  ///< ascending
+  const std::vector<int>* groups_ = nullptr;   ///< UpdateOptions::information_groups of this update
+  Eigen::Index group_block_size_ = 1;          ///< the block size, when groups_ is null
+  Eigen::Index group_width_ = 1;               ///< the largest group's component count
+  Eigen::MatrixXd group_covariance_;           ///< a group's D_g, when larger than kMaxBlock
   double block_limit_probability_ = 0;
   double block_limit_[kMaxBlock + 1] = {};  ///< chi-square quantiles by degrees of freedom
 };
@@ -502,6 +568,7 @@ S2KF_INLINE UpdateResult FilterCore::begin_update(Eigen::Index state_dimension, 
   if (options.iterations < 1) throw DimensionError("update: iterations must be at least 1");
   if (options.block_size < 1 || m % options.block_size != 0)
     throw DimensionError("update: the block size must divide the measurement dimension");
+  set_groups(m, options);
 
   UpdateResult result;
   rejected_blocks_.clear();
@@ -530,17 +597,17 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
 
   // Cyy = sum w (y_i - y^)(y_i - y^)^T + R_oo and Cyx = sum w (y_i - y^)(x_i - m)^T, using the
   // exactly zero-mean deviations S z_i for x.
-  auto cyy = cyy_buffer(mo);
   const bool single = options.single_precision_moments && positive_weights_;
+  reserve_moment_buffers(y.size(), n, single, options.information_form);
+  auto cyy = cyy_buffer(mo);
   bool deviations_scaled = false;
   if (information_form_applies(r, options)) {
     // Only the diagonal blocks of Cyy (and of R) are needed.
-    const Eigen::Index b = options.block_size;
     for (Eigen::Index j = 0; j < mo; ++j)
-      for (Eigen::Index i = j; i < mo && index_(i) / b == index_(j) / b; ++i)
+      for (Eigen::Index i = j; i < mo && group_of(index_(i)) == group_of(index_(j)); ++i)
         cyy(i, j) = r(index_(i), index_(j));
-    accumulate_information_moments(cyy, single, b);
-    if (information_form_nonlinearity(r, b) <= options.information_form_max_nonlinearity) {
+    accumulate_information_moments(cyy, single);
+    if (information_form_nonlinearity(r) <= options.information_form_max_nonlinearity) {
       if (options.block_gate_probability > 0) result.observed = reject_outlying_blocks(y, options, true);
       result.rejected_blocks = static_cast<Eigen::Index>(rejected_blocks_.size());
       return information_form_gain(mean, covariance, y, options, result);
@@ -587,18 +654,44 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
   return result;
 }
 
+S2KF_INLINE void FilterCore::set_groups(Eigen::Index m, const UpdateOptions& options) {
+  groups_ = options.information_groups;
+  group_block_size_ = group_width_ = options.block_size;
+  if (groups_ == nullptr) return;
+  const std::vector<int>& groups = *groups_;
+  if (static_cast<Eigen::Index>(groups.size()) != m)
+    throw DimensionError("update: " + std::to_string(groups.size()) + " information groups for " +
+                         std::to_string(m) + " measurement components");
+  Eigen::Index run = 0;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const int group = groups[static_cast<std::size_t>(i)];
+    const int previous = i > 0 ? groups[static_cast<std::size_t>(i - 1)] : group;
+    if (group < previous)
+      throw DimensionError("update: the information groups must not decrease (component " +
+                           std::to_string(i) + ")");
+    if (i % options.block_size != 0 && group != previous)
+      throw DimensionError("update: block " + std::to_string(i / options.block_size) +
+                           " spans two information groups");
+    run = i > 0 && group == previous ? run + 1 : 1;
+    group_width_ = std::max(group_width_, run);
+  }
+}
+
 S2KF_INLINE bool FilterCore::information_form_applies(const Eigen::MatrixXd& r,
                                                       const UpdateOptions& options) const {
   if (!options.information_form || !positive_weights_ || !unit_moments_ || options.iterations > 1)
     return false;
-  // R must not couple the blocks: the information form keeps only its diagonal blocks. Checked
-  // on the whole of R below each block, column by column, as an OR of the entries' bits without
+  // R must not couple the groups: the information form keeps only its diagonal blocks. Checked
+  // on the whole of R below each group, column by column, as an OR of the entries' bits without
   // the sign (so -0 counts as zero): an integer reduction the compiler vectorises.
-  const Eigen::Index b = options.block_size, m = r.rows();
+  const Eigen::Index m = r.rows();
   std::uint64_t bits = 0;
+  Eigen::Index group_end = 0;
   for (Eigen::Index j = 0; j < m; ++j) {
+    if (group_end <= j)
+      for (group_end = j + 1; group_end < m && group_of(group_end) == group_of(j);) ++group_end;
     const double* column = r.data() + j * m;
-    for (Eigen::Index i = std::min(m, (j / b + 1) * b); i < m; ++i) {
+    for (Eigen::Index i = group_end; i < m; ++i) {
       std::uint64_t entry;
       std::memcpy(&entry, column + i, sizeof entry);
       bits |= entry;
@@ -607,15 +700,14 @@ S2KF_INLINE bool FilterCore::information_form_applies(const Eigen::MatrixXd& r,
   return (bits & ~(std::uint64_t{1} << 63)) == 0;
 }
 
-S2KF_INLINE double FilterCore::information_form_nonlinearity(const Eigen::MatrixXd& r,
-                                                             Eigen::Index block_size) const {
+S2KF_INLINE double FilterCore::information_form_nonlinearity(const Eigen::MatrixXd& r) const {
   const Eigen::Index mo = observed_count_;
   const auto gt = regression_.leftCols(mo);
   double largest = 0;
   for (Eigen::Index k = 0; k < mo;) {
     double unexplained = 0, noise = 0;
-    const Eigen::Index block = index_(k) / block_size;
-    for (; k < mo && index_(k) / block_size == block; ++k) {
+    const Eigen::Index group = group_of(index_(k));
+    for (; k < mo && group_of(index_(k)) == group; ++k) {
       const double variance = r(index_(k), index_(k));
       noise += variance;
       unexplained += cyy_(k, k) - variance - gt.col(k).squaredNorm();
@@ -632,15 +724,15 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
                                                            const UpdateOptions& options,
                                                            UpdateResult result) {
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
-  const Eigen::Index n = mean.size(), mo = result.observed, b = options.block_size;
+  const Eigen::Index n = mean.size(), mo = result.observed;
   // In the whitened coordinates u = S^-1 (x - m) the prior is N(0, I) and the predictions regress
   // on u with G (regression_ holds G^T, one column per observed component).
   auto gt = regression_.leftCols(mo);
   auto innovation = innovation_.head(mo);
   for (Eigen::Index k = 0; k < mo; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
-  // Per block: D_b = C_b + R_b - G_b G_b^T (the spread G does not explain, plus the noise), then
+  // Per group: D_b = C_b + R_b - G_b G_b^T (the spread G does not explain, plus the noise), then
   // G_b and the innovation whitened by D_b's Cholesky factor L_b (forward substitution on the
-  // block's columns of G^T).
+  // group's columns of G^T).
   const auto whiten_block = [&](auto& d_block, Eigen::Index k, Eigen::Index d) {
     for (Eigen::Index j = 0; j < d; ++j)
       for (Eigen::Index i = j; i < d; ++i)
@@ -659,16 +751,28 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
     }
     return true;
   };
+  // A large group (a limb's markers): the same with matrix products, in place in a buffer.
+  const auto whiten_group = [&](Eigen::Index k, Eigen::Index d) {
+    if (group_covariance_.rows() < d) group_covariance_.resize(group_width_, group_width_);
+    auto d_group = group_covariance_.topLeftCorner(d, d);
+    d_group.template triangularView<Eigen::Lower>() = cyy_.block(k, k, d, d);
+    auto g_group = gt.middleCols(k, d);
+    d_group.template selfadjointView<Eigen::Lower>().rankUpdate(g_group.transpose(), -1.0);
+    const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(d_group);
+    if (llt.info() != Eigen::Success) return false;
+    llt.matrixU().template solveInPlace<Eigen::OnTheRight>(g_group);  // G_b^T L_b^-T
+    llt.matrixL().solveInPlace(innovation.segment(k, d));
+    return true;
+  };
   for (Eigen::Index k = 0; k < mo;) {
     Eigen::Index end = k;
-    while (end < mo && index_(end) / b == index_(k) / b) ++end;
+    while (end < mo && group_of(index_(end)) == group_of(index_(k))) ++end;
     bool positive;
     if (end - k <= kMaxBlock) {
       Small d_block(end - k, end - k);
       positive = whiten_block(d_block, k, end - k);
     } else {
-      Eigen::MatrixXd d_block(end - k, end - k);
-      positive = whiten_block(d_block, k, end - k);
+      positive = whiten_group(k, end - k);
     }
     if (!positive) {
       result.status = FilterStatus::innovation_not_positive_definite;
@@ -858,7 +962,7 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
 }
 
 S2KF_INLINE void FilterCore::accumulate_information_moments(Eigen::Block<Eigen::MatrixXd>& cyy,
-                                                            bool single_precision, Eigen::Index block_size) {
+                                                            bool single_precision) {
   const Eigen::Index mo = observed_count_, n = samples_.dimension(), count = samples_.count();
   auto y_dev = y_dev_.topRows(mo);
   if (regression_.rows() != n || regression_.cols() < mo)
@@ -881,7 +985,7 @@ S2KF_INLINE void FilterCore::accumulate_information_moments(Eigen::Block<Eigen::
       y_dev_f = (sqrt_weights_(0) * y_dev).template cast<float>();
     else
       y_dev_f = (y_dev * sqrt_weights_.asDiagonal()).template cast<float>();
-    add_diagonal_block_moments(cyy, y_dev_f, block_size, block_products_f_);
+    add_diagonal_block_moments(cyy, y_dev_f, block_products_f_);
     auto regression_f = single_buffer(regression_f_, n, mo);
     if (symmetric_) {
       auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
@@ -894,7 +998,7 @@ S2KF_INLINE void FilterCore::accumulate_information_moments(Eigen::Block<Eigen::
     return;
   }
   scale_columns_by_sqrt_weights(y_dev);
-  add_diagonal_block_moments(cyy, y_dev, block_size, block_products_);
+  add_diagonal_block_moments(cyy, y_dev, block_products_);
   if (symmetric_) {
     auto pair_difference = pair_difference_.topRows(mo);
     pair_difference.noalias() = y_dev.middleCols(o, h) - y_dev.rightCols(h);
@@ -956,7 +1060,7 @@ S2KF_INLINE Eigen::Index FilterCore::reject_outlying_blocks(const Eigen::VectorX
   for (Eigen::Index j = 0; j < kept; ++j) {
     const Eigen::Index from_j = kept_(j);
     for (Eigen::Index i = j; i < kept; ++i) {
-      if (diagonal_blocks && index_(kept_(i)) / b != index_(from_j) / b) break;  // past j's block
+      if (diagonal_blocks && group_of(index_(kept_(i))) != group_of(index_(from_j))) break;  // past j's group
       cyy_(i, j) = cyy_(kept_(i), from_j);
     }
   }

@@ -88,6 +88,8 @@ class Tracker {
   const TrackerOptions& options() const { return options_; }
   bool initialised() const { return initialised_; }
   const FrameEstimate& estimate() const { return estimate_; }
+  /// The model markers the recording supplies, in the order the measurement stacks them: body
+  /// part by body part (see body_part_of_frame), the model's order within a part.
   const std::vector<int>& used_markers() const { return used_markers_; }
   int frames_processed() const { return frames_; }
   /// The filter's posterior after the last frame: [root position (mm),
@@ -122,6 +124,22 @@ class Tracker {
       throw std::invalid_argument("the sample set has " + std::to_string(samples.dimension()) +
                                   " dimensions; the tracker's state has " + std::to_string(dimension));
     return samples;
+  }
+
+  /// The body part a frame belongs to, for the information form's groups: the first frame of the
+  /// unbranched chain it ends (a limb, the head, the spine), found by walking towards the root
+  /// while the parent frame carries no other joint; a branching frame (the pelvis) is a part of
+  /// its own. The markers of a part move together with the part's first joint, so the nonlinear
+  /// parts of their predictions are correlated (an arm's markers all swing with the shoulder).
+  static int body_part_of_frame(const body::BodyModel& model, int frame) {
+    while (frame > 0) {
+      const int parent = model.joints[static_cast<std::size_t>(frame - 1)].parent_frame;
+      int children = 0;
+      for (const body::Joint& joint : model.joints) children += joint.parent_frame == parent;
+      if (children > 1) break;
+      frame = parent;
+    }
+    return frame;
   }
 
   /// Start from the first frame with enough markers: root pose from a rigid fit
@@ -167,10 +185,11 @@ class Tracker {
   SmartSamplingKalmanFilter<Eigen::Dynamic> filter_;
   body::MarkerMeasurementModel measurement_model_;
   body::MarkerMeasurementModel mean_markers_model_;  ///< every model marker, for the reported pose
-  std::vector<int> used_markers_;
-  GaussianXd state_;   ///< the pose posterior (what the update works on)
-  GaussianXd motion_;  ///< constant velocity: [pose, rates]; its pose part
-                       ///< equals state_ between frames
+  std::vector<int> used_markers_;        ///< model markers in the measurement, body part by body part
+  std::vector<int> information_groups_;  ///< per measurement component: its marker's body part
+  GaussianXd state_;                     ///< the pose posterior (what the update works on)
+  GaussianXd motion_;                    ///< constant velocity: [pose, rates]; its pose part
+                                         ///< equals state_ between frames
   MarginalUpdate marginal_update_;
   Eigen::Matrix3d reference_rotation_ = Eigen::Matrix3d::Identity();
   Eigen::MatrixXd process_noise_, transition_, noise_;
@@ -204,6 +223,17 @@ S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping, Track
   for (int m = 0; m < model_.marker_count(); ++m)
     if (mapping_.point_of_marker[m] >= 0) used_markers_.push_back(m);
   if (used_markers_.empty()) throw std::invalid_argument("no recording label matches a marker of the model");
+  // The measurement stacks the markers body part by body part (model order within a part), so
+  // the information form's groups are consecutive.
+  std::vector<int> part_of_marker(static_cast<std::size_t>(model_.marker_count()));
+  for (int m = 0; m < model_.marker_count(); ++m)
+    part_of_marker[static_cast<std::size_t>(m)] =
+        body_part_of_frame(model_, model_.markers[static_cast<std::size_t>(m)].frame);
+  std::stable_sort(used_markers_.begin(), used_markers_.end(), [&](int a, int b) {
+    return part_of_marker[static_cast<std::size_t>(a)] < part_of_marker[static_cast<std::size_t>(b)];
+  });
+  for (const int m : used_markers_)
+    information_groups_.insert(information_groups_.end(), 3, part_of_marker[static_cast<std::size_t>(m)]);
   measurement_model_.select_markers(used_markers_);
   measurement_model_.set_single_precision(options_.single_precision_kinematics);  // not the reported markers
   const int n = state_dimension();
@@ -318,6 +348,7 @@ S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points
   update_options.single_precision_moments = options_.single_precision_moments;
   update_options.information_form = options_.information_form_update;
   update_options.information_form_max_nonlinearity = options_.information_form_max_nonlinearity;
+  update_options.information_groups = &information_groups_;
   ++frames_since_start_;
   estimate_.status = FilterStatus::nothing_observed;
   estimate_.nis = std::numeric_limits<double>::quiet_NaN();
