@@ -297,7 +297,9 @@ TEST(Tracker, TheMeasurementStacksTheMarkersBodyPartByBodyPart) {
   std::vector<std::string> runs;
   for (std::size_t k = 0; k < used.size(); ++k) {
     if (k == 0 || part(used[k]) != part(used[k - 1])) runs.push_back(part(used[k]));
-    if (k > 0 && part(used[k]) == part(used[k - 1])) EXPECT_LT(used[k - 1], used[k]);
+    if (k > 0 && part(used[k]) == part(used[k - 1])) {
+      EXPECT_LT(used[k - 1], used[k]);
+    }
   }
   std::vector<std::string> parts = runs;
   std::sort(parts.begin(), parts.end());

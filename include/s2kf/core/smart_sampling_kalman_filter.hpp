@@ -66,11 +66,12 @@ struct UpdateOptions {
   /// with zero mean and identity covariance (every LCD, UKF or moment-corrected set), R zero
   /// between blocks, the ordinary (not iterated) update; otherwise the ordinary update runs.
   bool information_form = false;
-  /// The information form's limit on how nonlinear the model may be over the samples: where, for
-  /// some observed block, trace(C_b - G_b G_b^T) / trace(R_b) (the predictions' spread that the
-  /// linearisation does not explain, against the noise) exceeds it, this update runs the ordinary
-  /// way. The cross-block correlations the information form leaves out are bounded by those
-  /// spreads (|Omega_ij| <= sqrt(Omega_ii Omega_jj)), so below the limit they are small against R.
+  /// The information form's limit on how nonlinear the model may be over the samples. Per observed
+  /// group, nu_g = trace(C_g - G_g G_g^T) / trace(R_g) is the predictions' spread that the
+  /// linearisation does not explain, against the noise. The cross-group correlations the form
+  /// leaves out are bounded by those spreads (|Omega_ij| <= sqrt(Omega_ii Omega_jj)), so where the
+  /// geometric mean of the two largest nu_g exceeds the limit this update runs the ordinary way;
+  /// below it they are small against R, and one nonlinear group alone leaves the form exact.
   /// Infinity: never fall back.
   double information_form_max_nonlinearity = std::numeric_limits<double>::infinity();
   /// The information form's groups: one id per measurement component, for measurements whose
@@ -264,8 +265,8 @@ class FilterCore {
   void accumulate_moments(Eigen::Block<Eigen::MatrixXd>& cyy, Eigen::Block<Eigen::MatrixXd>& cyx,
                           bool single_precision, bool deviations_scaled = false);
 
-  /// The largest trace(C_b - G_b G_b^T) / trace(R_b) over the observed blocks, after
-  /// accumulate_information_moments (see UpdateOptions::information_form_max_nonlinearity).
+  /// The geometric mean of the two largest trace(C_g - G_g G_g^T) / trace(R_g) over the observed
+  /// groups, after accumulate_information_moments (UpdateOptions::information_form_max_nonlinearity).
   double information_form_nonlinearity(const Eigen::MatrixXd& r) const;
 
   /// UpdateOptions::information_form: adds the diagonal blocks (one per group) of
@@ -703,7 +704,7 @@ S2KF_INLINE bool FilterCore::information_form_applies(const Eigen::MatrixXd& r,
 S2KF_INLINE double FilterCore::information_form_nonlinearity(const Eigen::MatrixXd& r) const {
   const Eigen::Index mo = observed_count_;
   const auto gt = regression_.leftCols(mo);
-  double largest = 0;
+  double largest = 0, second = 0;
   for (Eigen::Index k = 0; k < mo;) {
     double unexplained = 0, noise = 0;
     const Eigen::Index group = group_of(index_(k));
@@ -712,10 +713,18 @@ S2KF_INLINE double FilterCore::information_form_nonlinearity(const Eigen::Matrix
       noise += variance;
       unexplained += cyy_(k, k) - variance - gt.col(k).squaredNorm();
     }
-    if (!(unexplained <= largest * noise))
-      largest = noise > 0 ? unexplained / noise : std::numeric_limits<double>::infinity();
+    const double ratio = noise > 0 ? unexplained / noise : std::numeric_limits<double>::infinity();
+    if (!(ratio <= largest)) {  // NaN too: then the product below is NaN and the form not taken
+      second = largest;
+      largest = ratio;
+    } else if (ratio > second) {
+      second = ratio;
+    }
   }
-  return largest;
+  // What the form leaves out, the correlation between two groups' nonlinear parts, is bounded
+  // by sqrt(Omega_ii Omega_jj): a single nonlinear group (a limb whose markers were hidden for a
+  // while) costs nothing; two make it inexact.
+  return std::sqrt(largest * second);
 }
 
 S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::VectorXd> mean,
