@@ -126,19 +126,17 @@ class Tracker {
     return samples;
   }
 
-  /// The body part a frame belongs to, for the information form's groups: the first frame of the
-  /// unbranched chain it ends (a limb, the head, the spine), found by walking towards the root
-  /// while the parent frame carries no other joint; a branching frame (the pelvis) is a part of
-  /// its own. The markers of a part move together with the part's first joint, so the nonlinear
-  /// parts of their predictions are correlated (an arm's markers all swing with the shoulder).
+  /// The body part a frame belongs to, for the information form's groups: the subtree of the
+  /// root's child joint it descends from (for the MMM model the upper body, from the lumbar spine
+  /// up to the head and the hands, and each leg), the root's own markers (the pelvis) a part of
+  /// their own. The nonlinear parts of the predictions are correlated within a part: every marker
+  /// of the upper body moves with the spine's joints, every marker of a leg with its hip. Across
+  /// parts only the root's pose is shared, which the filter's local rotation error keeps nearly
+  /// linear. Finer parts (each arm, the head and the spine apart) left out the spine's share of
+  /// the arms' markers and tracked a real recording 25 % worse (docs/benchmarks.md).
   static int body_part_of_frame(const body::BodyModel& model, int frame) {
-    while (frame > 0) {
-      const int parent = model.joints[static_cast<std::size_t>(frame - 1)].parent_frame;
-      int children = 0;
-      for (const body::Joint& joint : model.joints) children += joint.parent_frame == parent;
-      if (children > 1) break;
-      frame = parent;
-    }
+    while (frame > 0 && model.joints[static_cast<std::size_t>(frame - 1)].parent_frame != 0)
+      frame = model.joints[static_cast<std::size_t>(frame - 1)].parent_frame;
     return frame;
   }
 

@@ -73,22 +73,22 @@ struct TrackerOptions {
   bool single_precision_moments = true;
   /// The update's gain in information form (UpdateOptions::information_form): the state's 46 x 46
   /// information matrix solved instead of the 150 x 150 innovation covariance, and Cyy formed only
-  /// within each body part (the pelvis, the spine, the head, each arm, each leg: the unbranched
-  /// chains of the kinematic tree, Tracker's information groups). It leaves out only the
-  /// correlation between body parts of the predictions' nonlinear parts (the first, iterated
-  /// frames always use the ordinary update). On by default, by measurement (docs/benchmarks.md):
-  /// the step at L = 301 takes about 0.6 of the ordinary update's time, the 24 simulated cases'
-  /// accuracy means are as good or better without occlusion and within 0.6 % with it, and the
-  /// real HDM05 recording's marker distance is 10.9 mm against 11.0. With a group per marker
-  /// instead of per body part HDM05 rose to 15.3 mm: a limb's markers all swing with its
-  /// shoulder or hip, and their nonlinear parts are correlated.
+  /// within each body part (the pelvis, the upper body, each leg: Tracker's information groups).
+  /// It leaves out only the correlation between body parts of the predictions' nonlinear parts
+  /// (the first, iterated frames and the calibration's tracking pass always use the ordinary
+  /// update). On by default, by measurement (docs/benchmarks.md): the step at L = 301 takes about
+  /// 0.83 of the ordinary update's time; the 24 simulated cases' accuracy means are equal or
+  /// better without occlusion and within 0.35 % with it; on the real recordings the marker
+  /// distance is within 0.3 % except test1 (+3.9 %) and the handstand (-1.8 %). With a group per
+  /// marker HDM05 rose from 11.0 to 15.3 mm; with a group per limb, test1 from 4.6 to 5.8 mm.
   bool information_form_update = true;
-  /// UpdateOptions::information_form_max_nonlinearity: a frame in which some marker's predicted
-  /// spread that the linearisation does not explain exceeds this multiple of its noise variance
-  /// (a wide prior over a curved model: a segment hidden for a while, a fast motion) is updated
-  /// the ordinary way. In steady tracking the hands' markers carry 1.5-2.3 (their wrists' spread
-  /// over the sine's curve); of 1, 1.5, 2, 2.5 and no limit, 2 kept every accuracy mean of 24
-  /// simulated cases within 1 % of the ordinary update's or better (docs/benchmarks.md).
+  /// UpdateOptions::information_form_max_nonlinearity: a frame in which two body parts' predicted
+  /// spreads that the linearisation does not explain exceed this multiple of their noise variance
+  /// (their geometric mean; a wide prior over a curved model: a segment hidden for a while, a fast
+  /// motion) is updated the ordinary way. In steady tracking the parts with hands carry 1.1-1.8.
+  /// Measured with a group per limb, of 1, 1.5, 2, 3, 5 and no limit, 2 to 5 kept every accuracy
+  /// mean of 24 simulated cases within 1 % of the ordinary update's and no limit did not, while 1
+  /// sent most of the handstand's frames to the ordinary update as well (docs/benchmarks.md).
   double information_form_max_nonlinearity = 2.0;
 
   /// After every update each joint's Theta is kept learnable (keep_joint_parameters_learnable):
