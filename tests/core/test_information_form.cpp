@@ -341,6 +341,35 @@ TEST(InformationForm, ANonlinearityBeyondTheLimitFallsBackToTheOrdinaryUpdate) {
   }
 }
 
+TEST(InformationForm, OneNonlinearBlockAloneDoesNotMakeItFallBack) {
+  // The cross-block terms the form leaves out are bounded by sqrt(Omega_ii Omega_jj): with one
+  // block nonlinear and the others linear they vanish, so even a limit of 1e-6 keeps the
+  // information form (its result is not the ordinary update's bit for bit, but equal to it to
+  // rounding), while a second nonlinear block sends the update to the ordinary form (bit for bit).
+  std::mt19937_64 rng(32);
+  const int n = 4, m = 9;
+  const GaussianXd prior(random_matrix(n, 1, rng) * 0.3, random_spd(n, rng) * 0.3);
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(m, m) * 0.5;
+  const Eigen::VectorXd y = random_matrix(m, 1, rng);
+  const Eigen::MatrixXd h = random_matrix(m, n, rng);
+  for (const bool two : {false, true}) {
+    PartlyNonlinearModel model{h, two ? std::vector<int>{0, 2} : std::vector<int>{1}};
+    GaussianXd information = prior, ordinary = prior;
+    S2kf filter(s2kf::compute_lcd_sample_set(n, 41).set);
+    UpdateOptions options = information_form(3), plain;
+    options.information_form_max_nonlinearity = 1e-6;
+    ASSERT_TRUE(filter.update(information, model, y, r, options).ok());
+    ASSERT_TRUE(filter.update(ordinary, model, y, r, plain).ok());
+    if (two) {
+      EXPECT_EQ(information.mean, ordinary.mean);
+    } else {
+      EXPECT_NE(information.mean, ordinary.mean);
+      EXPECT_LT(relative_error(information.mean, ordinary.mean), 1e-10);
+      EXPECT_LT(relative_error(information.covariance, ordinary.covariance), 1e-10);
+    }
+  }
+}
+
 TEST(InformationForm, TheBlockGateLeavesOutTheOutlyingBlockInEitherPrecision) {
   // Three sensors of one 3-D state, the middle one far off and one component of the last hidden:
   // the result is the Kalman update on the kept components.

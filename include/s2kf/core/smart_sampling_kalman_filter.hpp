@@ -714,7 +714,8 @@ S2KF_INLINE double FilterCore::information_form_nonlinearity(const Eigen::Matrix
       unexplained += cyy_(k, k) - variance - gt.col(k).squaredNorm();
     }
     const double ratio = noise > 0 ? unexplained / noise : std::numeric_limits<double>::infinity();
-    if (!(ratio <= largest)) {  // NaN too: then the product below is NaN and the form not taken
+    if (std::isnan(ratio)) return ratio;  // not below any limit: the ordinary update runs
+    if (ratio > largest) {
       second = largest;
       largest = ratio;
     } else if (ratio > second) {
