@@ -60,6 +60,32 @@ struct PartlyNonlinearModel {
   }
 };
 
+// One update of `prior` with the information form and the block gate (markers of 3 components,
+// `groups` if given): it must leave out exactly marker `block`, and the state must be the Kalman
+// update on the other observed components, to 1e-10 in double and to float rounding (1e-5) with
+// single-precision moments.
+void expect_the_gate_leaves_out(Eigen::Index block, const LinearModel& model, const GaussianXd& prior,
+                                const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
+                                const ObservedMask& observed, const std::vector<int>* groups, bool single) {
+  GaussianXd s = prior, expected = prior;
+  UpdateOptions options = information_form(3);
+  options.information_groups = groups;
+  options.block_gate_probability = 0.9999;
+  options.single_precision_moments = single;
+  S2kf filter(s2kf::compute_lcd_sample_set(static_cast<int>(prior.mean.size()), 31).set);
+  const s2kf::UpdateResult result = filter.update(s, model, y, r, observed, options);
+  ASSERT_TRUE(result.ok());
+  ASSERT_EQ(filter.rejected_blocks().size(), 1u);
+  EXPECT_EQ(filter.rejected_blocks()[0], block);
+  ObservedMask kept = observed;
+  kept.segment(3 * block, 3).setConstant(false);
+  EXPECT_EQ(result.observed, kept.count());
+  kalman_update(expected, model.h, y, r, kept);
+  const double tolerance = single ? 1e-5 : 1e-10;
+  EXPECT_LT(relative_error(s.mean, expected.mean), tolerance) << (single ? "single" : "double");
+  EXPECT_LT(relative_error(s.covariance, expected.covariance), tolerance) << (single ? "single" : "double");
+}
+
 TEST(InformationForm, LinearModelsGiveTheKalmanUpdateAtTheTrackersSize) {
   // 46 states and 50 blocks of 3, as the tracker with 50 markers; with 60 components hidden every
   // other one, many blocks keep one or two of their components.
@@ -240,25 +266,8 @@ TEST(InformationForm, TheBlockGateKeepsEachGroupWhole) {
   observed(13) = false;
   std::vector<int> groups(static_cast<std::size_t>(m), 0);
   std::fill(groups.begin() + 12, groups.end(), 1);
-  for (const bool single : {false, true}) {
-    GaussianXd s = prior, expected = prior;
-    UpdateOptions options = information_form(3);
-    options.information_groups = &groups;
-    options.block_gate_probability = 0.9999;
-    options.single_precision_moments = single;
-    S2kf filter(s2kf::compute_lcd_sample_set(n, 31).set);
-    const s2kf::UpdateResult result = filter.update(s, model, y, r, observed, options);
-    ASSERT_TRUE(result.ok());
-    ASSERT_EQ(filter.rejected_blocks().size(), 1u);
-    EXPECT_EQ(filter.rejected_blocks()[0], 2);
-    EXPECT_EQ(result.observed, m - 4);
-    ObservedMask kept = observed;
-    kept.segment(6, 3).setConstant(false);
-    kalman_update(expected, model.h, y, r, kept);
-    const double tolerance = single ? 1e-5 : 1e-10;
-    EXPECT_LT(relative_error(s.mean, expected.mean), tolerance) << (single ? "single" : "double");
-    EXPECT_LT(relative_error(s.covariance, expected.covariance), tolerance) << (single ? "single" : "double");
-  }
+  for (const bool single : {false, true})
+    expect_the_gate_leaves_out(2, model, prior, y, r, observed, &groups, single);
 }
 
 TEST(InformationForm, GroupsThatDoNotFitTheMeasurementAreRefused) {
@@ -383,24 +392,8 @@ TEST(InformationForm, TheBlockGateLeavesOutTheOutlyingBlockInEitherPrecision) {
   y << 1.5, -1.0, 0.0, -30.0, 45.0, 25.0, 2.0, -3.0, 1.5;
   ObservedMask observed = ObservedMask::Constant(9, true);
   observed(7) = false;
-  for (const bool single : {false, true}) {
-    GaussianXd s = prior, expected = prior;
-    UpdateOptions options = information_form(3);
-    options.block_gate_probability = 0.9999;
-    options.single_precision_moments = single;
-    S2kf filter(s2kf::compute_lcd_sample_set(3, 31).set);
-    const s2kf::UpdateResult result = filter.update(s, model, y, r, observed, options);
-    ASSERT_TRUE(result.ok());
-    ASSERT_EQ(filter.rejected_blocks().size(), 1u);
-    EXPECT_EQ(filter.rejected_blocks()[0], 1);
-    EXPECT_EQ(result.observed, 5);
-    ObservedMask kept = observed;
-    kept.segment(3, 3).setConstant(false);
-    kalman_update(expected, model.h, y, r, kept);
-    const double tolerance = single ? 1e-5 : 1e-10;
-    EXPECT_LT(relative_error(s.mean, expected.mean), tolerance) << (single ? "single" : "double");
-    EXPECT_LT(relative_error(s.covariance, expected.covariance), tolerance) << (single ? "single" : "double");
-  }
+  for (const bool single : {false, true})
+    expect_the_gate_leaves_out(1, model, prior, y, r, observed, nullptr, single);
 }
 
 TEST(InformationForm, ANoiseBlockThatIsNotPositiveDefiniteIsReportedAndTheStateKept) {
