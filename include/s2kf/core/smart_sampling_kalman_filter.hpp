@@ -266,14 +266,15 @@ class FilterCore {
                           bool single_precision, bool deviations_scaled = false);
 
   /// The geometric mean of the two largest trace(C_g - G_g G_g^T) / trace(R_g) over the observed
-  /// groups, after accumulate_information_moments (UpdateOptions::information_form_max_nonlinearity).
+  /// groups, after accumulate_regression (UpdateOptions::information_form_max_nonlinearity).
   double information_form_nonlinearity(const Eigen::MatrixXd& r) const;
 
-  /// UpdateOptions::information_form: adds the diagonal blocks (one per group) of
-  /// sum w (y_i - y^)(y_i - y^)^T to those of `cyy`, and sets regression_ (n x observed) to
-  /// G^T = sum w z_i (y_i - y^)^T, the predictions' regression on the whitened state (the samples
-  /// z_i of N(0, I) themselves, so no solve with the prior's factor is needed).
-  void accumulate_information_moments(Eigen::Block<Eigen::MatrixXd>& cyy, bool single_precision);
+  /// UpdateOptions::information_form: sets regression_ (n x observed) to G^T = sum w z_i (y_i - y^)^T,
+  /// the predictions' regression on the whitened state (the samples z_i of N(0, I) themselves, so
+  /// no solve with the prior's factor is needed), and component_spread_ to each observed
+  /// component's sum w (y_i - y^)^2. Leaves the deviations scaled by sqrt(w) (in y_dev_f_ in
+  /// single precision, in place in y_dev_ in double) for add_diagonal_block_moments.
+  void accumulate_regression(bool single_precision);
 
   /// The top-left rows x cols of a single-precision scratch matrix, grown when needed.
   static Eigen::Block<Eigen::MatrixXf> single_buffer(Eigen::MatrixXf& buffer, Eigen::Index rows,
@@ -312,6 +313,8 @@ class FilterCore {
       }
     }
     if (!information_form) return;
+    if (component_spread_.size() < m) component_spread_.resize(m);
+    if (single_precision) single_buffer(component_spread_f_, m, 1);
     if (regression_.rows() != n || regression_.cols() < m)
       regression_.resize(n, std::max(regression_.cols(), m));
     Eigen::MatrixXd& products = block_products_;
@@ -379,7 +382,7 @@ class FilterCore {
   // The information form: sqrt(w) z of the samples (the + half of a symmetric set), G^T, the
   // n x n system and the products per block (see add_diagonal_block_moments).
   Eigen::MatrixXd scaled_points_, regression_, information_, whitening_, block_products_;
-  Eigen::MatrixXf scaled_points_f_, regression_f_, block_products_f_;
+  Eigen::MatrixXf scaled_points_f_, regression_f_, block_products_f_, component_spread_f_;
   Eigen::LLT<Eigen::MatrixXd> information_factor_;
   Eigen::VectorXd information_vector_, whitened_step_, state_step_;
   Eigen::Index observed_count_ = 0;
@@ -389,6 +392,7 @@ class FilterCore {
   Eigen::Index group_block_size_ = 1;          ///< the block size, when groups_ is null
   Eigen::Index group_width_ = 1;               ///< the largest group's component count
   Eigen::MatrixXd group_covariance_;           ///< a group's D_g, when larger than kMaxBlock
+  Eigen::VectorXd component_spread_;           ///< per observed component: sum w (y_i - y^)^2
   double block_limit_probability_ = 0;
   double block_limit_[kMaxBlock + 1] = {};  ///< chi-square quantiles by degrees of freedom
 };
@@ -607,8 +611,14 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
     for (Eigen::Index j = 0; j < mo; ++j)
       for (Eigen::Index i = j; i < mo && group_of(index_(i)) == group_of(index_(j)); ++i)
         cyy(i, j) = r(index_(i), index_(j));
-    accumulate_information_moments(cyy, single);
+    // The regression and each component's spread decide whether the form applies; the groups'
+    // blocks of Cyy are summed only where it does, so a frame that falls back does not pay for them.
+    accumulate_regression(single);
     if (information_form_nonlinearity(r) <= options.information_form_max_nonlinearity) {
+      if (single)
+        add_diagonal_block_moments(cyy, y_dev_f_.topLeftCorner(mo, samples_.count()), block_products_f_);
+      else
+        add_diagonal_block_moments(cyy, y_dev_.topRows(mo), block_products_);
       if (options.block_gate_probability > 0) result.observed = reject_outlying_blocks(y, options, true);
       result.rejected_blocks = static_cast<Eigen::Index>(rejected_blocks_.size());
       return information_form_gain(mean, covariance, y, options, result);
@@ -711,7 +721,7 @@ S2KF_INLINE double FilterCore::information_form_nonlinearity(const Eigen::Matrix
     for (; k < mo && group_of(index_(k)) == group; ++k) {
       const double variance = r(index_(k), index_(k));
       noise += variance;
-      unexplained += cyy_(k, k) - variance - gt.col(k).squaredNorm();
+      unexplained += component_spread_(k) - gt.col(k).squaredNorm();
     }
     const double ratio = noise > 0 ? unexplained / noise : std::numeric_limits<double>::infinity();
     if (std::isnan(ratio)) return ratio;  // not below any limit: the ordinary update runs
@@ -971,8 +981,7 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
   }
 }
 
-S2KF_INLINE void FilterCore::accumulate_information_moments(Eigen::Block<Eigen::MatrixXd>& cyy,
-                                                            bool single_precision) {
+S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
   const Eigen::Index mo = observed_count_, n = samples_.dimension(), count = samples_.count();
   auto y_dev = y_dev_.topRows(mo);
   if (regression_.rows() != n || regression_.cols() < mo)
@@ -995,7 +1004,11 @@ S2KF_INLINE void FilterCore::accumulate_information_moments(Eigen::Block<Eigen::
       y_dev_f = (sqrt_weights_(0) * y_dev).template cast<float>();
     else
       y_dev_f = (y_dev * sqrt_weights_.asDiagonal()).template cast<float>();
-    add_diagonal_block_moments(cyy, y_dev_f, block_products_f_);
+    // Column by column (the matrix is column-major): one pass down each sample's predictions.
+    auto spread_f = single_buffer(component_spread_f_, mo, 1).col(0);
+    spread_f.setZero();
+    for (Eigen::Index i = 0; i < count; ++i) spread_f += y_dev_f.col(i).cwiseAbs2();
+    component_spread_.head(mo) = spread_f.template cast<double>();
     auto regression_f = single_buffer(regression_f_, n, mo);
     if (symmetric_) {
       auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
@@ -1008,7 +1021,9 @@ S2KF_INLINE void FilterCore::accumulate_information_moments(Eigen::Block<Eigen::
     return;
   }
   scale_columns_by_sqrt_weights(y_dev);
-  add_diagonal_block_moments(cyy, y_dev, block_products_);
+  auto spread = component_spread_.head(mo);
+  spread.setZero();
+  for (Eigen::Index i = 0; i < count; ++i) spread += y_dev.col(i).cwiseAbs2();
   if (symmetric_) {
     auto pair_difference = pair_difference_.topRows(mo);
     pair_difference.noalias() = y_dev.middleCols(o, h) - y_dev.rightCols(h);
