@@ -101,36 +101,24 @@ BENCHMARK(BM_TrackStepConstantVelocity)
     ->ArgNames({"L", "visible"})
     ->Unit(benchmark::kMicrosecond);
 
-// The floor alone, and its two halves.
-void BM_Floor(benchmark::State& state) {
+// The floors alone and their parts: one member of the Floor at this benchmark's {L, visible}.
+void run_floor_part(benchmark::State& state, void (Floor::*part)()) {
   const int samples = static_cast<int>(state.range(0));
   const int visible = static_cast<int>(state.range(1));
   Floor floor(converged_state(samples), lcd_sample_set(46, samples).set, visible);
-  for (auto _ : state) floor.run();
+  for (auto _ : state) (floor.*part)();
 }
+
+void BM_Floor(benchmark::State& state) { run_floor_part(state, &Floor::run); }
 BENCHMARK(BM_Floor)->Apply(add_args);
 
-void BM_FloorRegression(benchmark::State& state) {
-  const int samples = static_cast<int>(state.range(0));
-  const int visible = static_cast<int>(state.range(1));
-  Floor floor(converged_state(samples), lcd_sample_set(46, samples).set, visible);
-  for (auto _ : state) floor.regression();
-}
+void BM_FloorRegression(benchmark::State& state) { run_floor_part(state, &Floor::regression); }
 BENCHMARK(BM_FloorRegression)->Apply(add_args);
 
-void BM_FloorSinglePoseFk(benchmark::State& state) {
-  const int samples = static_cast<int>(state.range(0));
-  Floor floor(converged_state(samples), lcd_sample_set(46, samples).set, 50);
-  for (auto _ : state) floor.single_pose_fk();
-}
+void BM_FloorSinglePoseFk(benchmark::State& state) { run_floor_part(state, &Floor::single_pose_fk); }
 BENCHMARK(BM_FloorSinglePoseFk)->Args({301, 50})->ArgNames({"L", "visible"})->Unit(benchmark::kMicrosecond);
 
-void BM_FloorRankUpdate(benchmark::State& state) {
-  const int samples = static_cast<int>(state.range(0));
-  const int visible = static_cast<int>(state.range(1));
-  Floor floor(converged_state(samples), lcd_sample_set(46, samples).set, visible);
-  for (auto _ : state) floor.rank_update();
-}
+void BM_FloorRankUpdate(benchmark::State& state) { run_floor_part(state, &Floor::rank_update); }
 BENCHMARK(BM_FloorRankUpdate)->Apply(add_args);
 
 // The first frame (10 passes of posterior linearisation from the rigid-fit start) and one of the

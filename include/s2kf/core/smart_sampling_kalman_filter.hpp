@@ -182,9 +182,7 @@ class FilterCore {
   template <typename Scalar, typename Deviations>
   void add_diagonal_block_moments(Eigen::Block<Eigen::MatrixXd>& cyy, const Deviations& d,
                                   Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& products) const {
-    const Eigen::Index mo = d.rows(), width = group_width_;
-    if (products.rows() < mo || products.cols() < width)
-      products.resize(std::max(products.rows(), mo), std::max(products.cols(), width));
+    const Eigen::Index mo = d.rows(), width = group_width_;  // `products`: reserve_moment_buffers
     if (width > kMaxBlock) {
       for (Eigen::Index k = 0; k < mo;) {
         Eigen::Index end = k;
@@ -296,9 +294,10 @@ class FilterCore {
   static constexpr int kMaxBlock = 6;
 
   /// Sizes the moments' buffers for every component of an m-dimensional measurement, those of the
-  /// ordinary update and, with `information_form`, those of the information form as well: a later
-  /// frame with more components observed, or one whose samples are too nonlinear for the
-  /// information form, then allocates nothing.
+  /// ordinary update and, with `information_form`, those of the information form as well (the
+  /// information form's steps rely on it and grow nothing themselves): a later frame with more
+  /// components observed, or one whose samples are too nonlinear for the information form, then
+  /// allocates nothing.
   void reserve_moment_buffers(Eigen::Index m, Eigen::Index n, bool single_precision, bool information_form) {
     cyy_buffer(m);
     cyx_buffer(m, n);
@@ -773,7 +772,6 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
   };
   // A large group (a limb's markers): the same with matrix products, in place in a buffer.
   const auto whiten_group = [&](Eigen::Index k, Eigen::Index d) {
-    if (group_covariance_.rows() < d) group_covariance_.resize(group_width_, group_width_);
     auto d_group = group_covariance_.topLeftCorner(d, d);
     d_group.template triangularView<Eigen::Lower>() = cyy_.block(k, k, d, d);
     auto g_group = gt.middleCols(k, d);
@@ -984,12 +982,15 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
 S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
   const Eigen::Index mo = observed_count_, n = samples_.dimension(), count = samples_.count();
   auto y_dev = y_dev_.topRows(mo);
-  if (regression_.rows() != n || regression_.cols() < mo)
-    regression_.resize(n, std::max(regression_.cols(), mo));
-  auto regression = regression_.leftCols(mo);
+  auto regression = regression_.leftCols(mo);  // sized by reserve_moment_buffers
   // Pairs +z_k, -z_k with equal weights: sum over a pair of w z (y_i - y^)^T is
   // w z_k (y+_k - y-_k)^T, so G^T costs half the product over all samples.
   const Eigen::Index h = half_count_, o = origin_count_;
+  // Each row's sum of squares, column by column (the matrices are column-major).
+  const auto sum_of_squares = [count](auto& spread, const auto& deviations) {
+    spread.setZero();
+    for (Eigen::Index i = 0; i < count; ++i) spread += deviations.col(i).cwiseAbs2();
+  };
   const auto product = [](auto& target, const auto& points, const auto& deviations) {
     target.setZero();
     for (Eigen::Index k = 0; k < points.cols(); k += kChunk) {
@@ -1004,10 +1005,8 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
       y_dev_f = (sqrt_weights_(0) * y_dev).template cast<float>();
     else
       y_dev_f = (y_dev * sqrt_weights_.asDiagonal()).template cast<float>();
-    // Column by column (the matrix is column-major): one pass down each sample's predictions.
     auto spread_f = single_buffer(component_spread_f_, mo, 1).col(0);
-    spread_f.setZero();
-    for (Eigen::Index i = 0; i < count; ++i) spread_f += y_dev_f.col(i).cwiseAbs2();
+    sum_of_squares(spread_f, y_dev_f);
     component_spread_.head(mo) = spread_f.template cast<double>();
     auto regression_f = single_buffer(regression_f_, n, mo);
     if (symmetric_) {
@@ -1022,8 +1021,7 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
   }
   scale_columns_by_sqrt_weights(y_dev);
   auto spread = component_spread_.head(mo);
-  spread.setZero();
-  for (Eigen::Index i = 0; i < count; ++i) spread += y_dev.col(i).cwiseAbs2();
+  sum_of_squares(spread, y_dev);
   if (symmetric_) {
     auto pair_difference = pair_difference_.topRows(mo);
     pair_difference.noalias() = y_dev.middleCols(o, h) - y_dev.rightCols(h);
