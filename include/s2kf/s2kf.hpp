@@ -13,6 +13,7 @@
 #include <s2kf/body/pose_columns.hpp>
 #include <s2kf/body/vector_sincos.hpp>
 
+#include <s2kf/core/bordered_cholesky.hpp>
 #include <s2kf/core/box_muller.hpp>
 #include <s2kf/core/chi_square.hpp>
 #include <s2kf/core/compilation_mode.hpp>

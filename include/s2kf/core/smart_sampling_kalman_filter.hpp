@@ -5,6 +5,7 @@
 /// components, NIS, gating and iterated (posterior-linearised) update.
 #pragma once
 
+#include <s2kf/core/bordered_cholesky.hpp>
 #include <s2kf/core/chi_square.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
@@ -323,8 +324,8 @@ class FilterCore {
       single_buffer(regression_f_, n, m);
       if (products_f.rows() < m || products_f.cols() < group_width_) products_f.resize(m, group_width_);
     }
-    if (group_width_ > kMaxBlock && group_covariance_.rows() < group_width_)
-      group_covariance_.resize(group_width_, group_width_);
+    bordered_.resize(std::max(n, group_width_), n + 1);
+    state_step_.resize(n);
   }
 
   Eigen::Block<Eigen::MatrixXd> cyy_buffer(Eigen::Index mo) {
@@ -380,17 +381,16 @@ class FilterCore {
   Eigen::MatrixXf y_dev_f_, cyy_f_, pair_difference_f_, half_deviation_f_, cyx_f_;  ///< single precision
   // The information form: sqrt(w) z of the samples (the + half of a symmetric set), G^T, the
   // n x n system and the products per block (see add_diagonal_block_moments).
-  Eigen::MatrixXd scaled_points_, regression_, information_, whitening_, block_products_;
+  Eigen::MatrixXd scaled_points_, regression_, block_products_;
   Eigen::MatrixXf scaled_points_f_, regression_f_, block_products_f_, component_spread_f_;
-  Eigen::LLT<Eigen::MatrixXd> information_factor_;
-  Eigen::VectorXd information_vector_, whitened_step_, state_step_;
+  BorderedCholesky bordered_;  ///< a large group's D_g, then the n x n information matrix
+  Eigen::VectorXd state_step_;
   Eigen::Index observed_count_ = 0;
   bool direct_ = false;  ///< the model writes straight into y_dev_ (see prepare_predictions)
   std::vector<Eigen::Index> rejected_blocks_;  ///< ascending
   const std::vector<int>* groups_ = nullptr;   ///< UpdateOptions::information_groups of this update
   Eigen::Index group_block_size_ = 1;          ///< the block size, when groups_ is null
   Eigen::Index group_width_ = 1;               ///< the largest group's component count
-  Eigen::MatrixXd group_covariance_;           ///< a group's D_g, when larger than kMaxBlock
   Eigen::VectorXd component_spread_;           ///< per observed component: sum w (y_i - y^)^2
   double block_limit_probability_ = 0;
   double block_limit_[kMaxBlock + 1] = {};  ///< chi-square quantiles by degrees of freedom
@@ -770,16 +770,20 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
     }
     return true;
   };
-  // A large group (a limb's markers): the same with matrix products, in place in a buffer.
+  // A large group (a limb's markers): D_b formed in the panel of the bordered factorisation, with
+  // G_b^T and the innovation as its border, so that one pass gives L_b, G_b^T L_b^-T and L_b^-1 e_b.
   const auto whiten_group = [&](Eigen::Index k, Eigen::Index d) {
-    auto d_group = group_covariance_.topLeftCorner(d, d);
-    d_group.template triangularView<Eigen::Lower>() = cyy_.block(k, k, d, d);
+    bordered_.resize(d, n + 1);
+    auto panel = bordered_.panel();
+    auto d_group = panel.topRows(d);
     auto g_group = gt.middleCols(k, d);
+    d_group.template triangularView<Eigen::Lower>() = cyy_.block(k, k, d, d);
     d_group.template selfadjointView<Eigen::Lower>().rankUpdate(g_group.transpose(), -1.0);
-    const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(d_group);
-    if (llt.info() != Eigen::Success) return false;
-    llt.matrixU().template solveInPlace<Eigen::OnTheRight>(g_group);  // G_b^T L_b^-T
-    llt.matrixL().solveInPlace(innovation.segment(k, d));
+    panel.middleRows(d, n) = g_group;
+    panel.row(d + n) = innovation.segment(k, d).transpose();
+    if (!bordered_.factorise()) return false;
+    g_group = panel.middleRows(d, n);
+    innovation.segment(k, d) = panel.row(d + n).transpose();
     return true;
   };
   for (Eigen::Index k = 0; k < mo;) {
@@ -799,28 +803,32 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
     k = end;
   }
   // M = I + W^T W with W = D^-1/2 G; u+ = M^-1 W^T e; NIS = e^T (G G^T + D)^-1 e by Woodbury.
-  information_.setIdentity(n, n);
-  rank_update_lower(information_, gt);
-  information_factor_.compute(information_);
-  if (information_factor_.info() != Eigen::Success) {
+  // M = L_M L_M^T is factorised with the prior's factor S and v = W^T e as its border, giving
+  // T = S L_M^-T and t = L_M^-1 v: then the NIS is |e|^2 - |t|^2, the step S M^-1 v = T t and the
+  // posterior covariance S M^-1 S^T = T T^T.
+  bordered_.resize(n, n + 1);
+  auto panel = bordered_.panel();
+  auto information = panel.topRows(n);
+  information.setIdentity();
+  rank_update_lower(information, gt);
+  panel.middleRows(n, n).template triangularView<Eigen::Lower>() = factor_.matrixL();
+  panel.middleRows(n, n).template triangularView<Eigen::StrictlyUpper>().setZero();
+  panel.row(2 * n).noalias() = innovation.transpose() * gt.transpose();
+  if (!bordered_.factorise()) {
     result.status = FilterStatus::innovation_not_positive_definite;
     return result;
   }
-  information_vector_.noalias() = gt * innovation;
-  whitened_step_ = information_vector_;
-  information_factor_.solveInPlace(whitened_step_);
-  result.nis = std::max(0.0, innovation.squaredNorm() - information_vector_.dot(whitened_step_));
+  const auto whitening = panel.middleRows(n, n);
+  const auto whitened_information = panel.row(2 * n).transpose();
+  result.nis = std::max(0.0, innovation.squaredNorm() - whitened_information.squaredNorm());
   if (gated(result.nis, mo, options)) {
     result.status = FilterStatus::gated;
     return result;
   }
-  // mean += S u+, C+ = (S L_M^-T)(S L_M^-T)^T.
-  state_step_.noalias() = factor_.matrixL() * whitened_step_;
-  whitening_.setZero(n, n);
-  whitening_.template triangularView<Eigen::Lower>() = factor_.matrixL();
-  information_factor_.matrixU().template solveInPlace<Eigen::OnTheRight>(whitening_);
+  // mean += S u+ = T t, C+ = T T^T.
+  state_step_.noalias() = whitening * whitened_information;
   posterior_covariance_.setZero(n, n);
-  posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(whitening_);
+  posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(whitening);
   if (!complete_posterior_is_positive_definite()) {
     result.status = FilterStatus::posterior_not_positive_definite;
     return result;
