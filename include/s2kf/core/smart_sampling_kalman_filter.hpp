@@ -234,13 +234,6 @@ class FilterCore {
       c.template selfadjointView<Eigen::Lower>().rankUpdate(d.middleCols(k, std::min(kChunk, d.cols() - k)));
   }
 
-  /// B := L^-1 B for the lower triangle L of `lower`. Eigen packs the whole triangle of a
-  /// triangular matrix solve into one buffer, which leaves the stack (128 KiB) beyond about 128
-  /// rows; larger systems are split in halves, X1 = L11^-1 B1, B2 -= L21 X1, X2 = L22^-1 B2, so
-  /// every piece stays on the stack and a step does not allocate.
-  static void solve_lower_in_place(const Eigen::Ref<const Eigen::MatrixXd>& lower,
-                                   Eigen::Ref<Eigen::MatrixXd> b);
-
   /// Columns times sqrt(w_i); one scalar when all weights are equal.
   template <typename Block>
   void scale_columns_by_sqrt_weights(Block& block) const {
@@ -302,6 +295,7 @@ class FilterCore {
   void reserve_moment_buffers(Eigen::Index m, Eigen::Index n, bool single_precision, bool information_form) {
     cyy_buffer(m);
     cyx_buffer(m, n);
+    bordered_.resize(std::max(m, n), n + 1);  // the gain's panel: Cyy, a group's D or the information matrix
     const Eigen::Index count = samples_.count(), h = half_count_;
     if (single_precision) {
       single_buffer(y_dev_f_, m, count);
@@ -324,7 +318,6 @@ class FilterCore {
       single_buffer(regression_f_, n, m);
       if (products_f.rows() < m || products_f.cols() < group_width_) products_f.resize(m, group_width_);
     }
-    bordered_.resize(std::max(n, group_width_), n + 1);
     state_step_.resize(n);
   }
 
@@ -383,7 +376,7 @@ class FilterCore {
   // n x n system and the products per block (see add_diagonal_block_moments).
   Eigen::MatrixXd scaled_points_, regression_, block_products_;
   Eigen::MatrixXf scaled_points_f_, regression_f_, block_products_f_, component_spread_f_;
-  BorderedCholesky bordered_;  ///< a large group's D_g, then the n x n information matrix
+  BorderedCholesky bordered_;  ///< Cyy, or a large group's D_g and then the information matrix
   Eigen::VectorXd state_step_;
   Eigen::Index observed_count_ = 0;
   bool direct_ = false;  ///< the model writes straight into y_dev_ (see prepare_predictions)
@@ -635,31 +628,32 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
   const Eigen::Index mo_kept = result.observed;
   result.rejected_blocks = static_cast<Eigen::Index>(rejected_blocks_.size());
 
-  // Square-root gain: Lyy = chol(Cyy), A^T = Lyy^-1 Cyx, t = Lyy^-1 (y - y^), on the kept rows.
-  auto cyy_kept = cyy_.topLeftCorner(mo_kept, mo_kept);
-  auto cyx_kept = cyx_.topRows(mo_kept);
-  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(cyy_kept);
-  if (llt.info() != Eigen::Success) {
+  // Square-root gain: Lyy = chol(Cyy), A = Cyx^T Lyy^-T, t = Lyy^-1 (y - y^), on the kept rows,
+  // in one bordered factorisation of [Cyy; Cyx^T; (y - y^)^T].
+  bordered_.resize(mo_kept, n + 1);
+  auto panel = bordered_.panel();
+  panel.topRows(mo_kept).template triangularView<Eigen::Lower>() = cyy_.topLeftCorner(mo_kept, mo_kept);
+  panel.middleRows(mo_kept, n) = cyx_.topRows(mo_kept).transpose();
+  for (Eigen::Index k = 0; k < mo_kept; ++k) panel(mo_kept + n, k) = y(index_(k)) - y_mean_(k);
+  if (!bordered_.factorise()) {
     result.status = FilterStatus::innovation_not_positive_definite;
     return result;
   }
-  auto innovation = innovation_.head(mo_kept);
-  for (Eigen::Index k = 0; k < mo_kept; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
-  solve_lower_in_place(llt.matrixLLT(), cyx_kept);
-  llt.matrixL().solveInPlace(innovation);
-  result.nis = innovation.squaredNorm();
+  const auto gain_factor = panel.middleRows(mo_kept, n);
+  const auto whitened_innovation = panel.row(mo_kept + n).transpose();
+  result.nis = whitened_innovation.squaredNorm();
   if (gated(result.nis, mo_kept, options)) {
     result.status = FilterStatus::gated;
     return result;
   }
   // C+ = C - A A^T must stay positive definite; check on a copy before touching the state.
   posterior_covariance_ = covariance;
-  posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(cyx_kept.transpose(), -1.0);
+  posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(gain_factor, -1.0);
   if (!complete_posterior_is_positive_definite()) {
     result.status = FilterStatus::posterior_not_positive_definite;
     return result;
   }
-  mean.noalias() += cyx_kept.transpose() * innovation;
+  mean.noalias() += gain_factor * whitened_innovation;
   covariance = posterior_covariance_;
   return result;
 }
@@ -874,21 +868,6 @@ S2KF_INLINE void FilterCore::detect_symmetry() {
                samples_.points.middleCols(o, h) == -samples_.points.rightCols(h) &&
                samples_.weights.segment(o, h) == samples_.weights.tail(h);
   equal_weights_ = (samples_.weights.array() == samples_.weights(0)).all();
-}
-
-S2KF_INLINE void FilterCore::solve_lower_in_place(const Eigen::Ref<const Eigen::MatrixXd>& lower,
-                                                  Eigen::Ref<Eigen::MatrixXd> b) {
-  const Eigen::Index n = lower.rows();
-  if (n <= kChunk) {
-    lower.template triangularView<Eigen::Lower>().solveInPlace(b);
-    return;
-  }
-  const Eigen::Index h = n / 2;
-  auto top = b.topRows(h);
-  auto bottom = b.bottomRows(n - h);
-  solve_lower_in_place(lower.topLeftCorner(h, h), top);
-  bottom.noalias() -= lower.bottomLeftCorner(n - h, h) * top;
-  solve_lower_in_place(lower.bottomRightCorner(n - h, n - h), bottom);
 }
 
 S2KF_INLINE Eigen::MatrixXd& FilterCore::prepare_predictions(Eigen::Index m) {
