@@ -1,9 +1,14 @@
 // The S2KF measurement update of a linear model at the tracking size (46 states, 150 measurements)
-// for the UKF-sized set (93 samples) and LCD sets of 301 and 461 samples.
+// for the UKF-sized set (93 samples) and LCD sets of 301 and 461 samples; and the gain's
+// factorisation at the tracker's sizes (a leg's 24 components, the pelvis's 21, the 46 x 46
+// information matrix, the upper body's 81, the whole 150) with a border of 47 rows (46 states and
+// the innovation): BorderedCholesky against Eigen's LLT and triangular solve.
 //   build/benchmarks/bench_filter --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <s2kf/core/bordered_cholesky.hpp>
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 
+#include <Eigen/Cholesky>
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -40,6 +45,50 @@ void BM_LinearUpdate(benchmark::State& state) {
   state.counters["samples"] = count;
 }
 BENCHMARK(BM_LinearUpdate)->Arg(93)->Arg(301)->Arg(461)->Unit(benchmark::kMicrosecond);
+
+// A well-conditioned symmetric positive-definite matrix and a random border, as in the gain.
+struct Panel {
+  Eigen::MatrixXd matrix, border;
+  explicit Panel(Eigen::Index size) {
+    std::mt19937_64 rng(2);
+    std::normal_distribution<double> normal;
+    Eigen::MatrixXd a(size, size + 10);
+    for (Eigen::Index i = 0; i < a.size(); ++i) a.data()[i] = normal(rng);
+    matrix = a * a.transpose() + static_cast<double>(size) * Eigen::MatrixXd::Identity(size, size);
+    border.resize(kStates + 1, size);
+    for (Eigen::Index i = 0; i < border.size(); ++i) border.data()[i] = normal(rng);
+  }
+};
+
+// Both benchmarks copy the inputs in every iteration, as the gain does.
+void BM_BorderedCholesky(benchmark::State& state) {
+  const Eigen::Index size = state.range(0);
+  const Panel input(size);
+  s2kf::BorderedCholesky bordered;
+  bordered.resize(size, input.border.rows());
+  for (auto _ : state) {
+    auto panel = bordered.panel();
+    panel.topRows(size).triangularView<Eigen::Lower>() = input.matrix;
+    panel.bottomRows(input.border.rows()) = input.border;
+    const bool positive = bordered.factorise();
+    benchmark::DoNotOptimize(positive);
+  }
+}
+BENCHMARK(BM_BorderedCholesky)->Arg(21)->Arg(24)->Arg(46)->Arg(81)->Arg(150)->Unit(benchmark::kMicrosecond);
+
+void BM_EigenCholeskyAndSolve(benchmark::State& state) {
+  const Eigen::Index size = state.range(0);
+  const Panel input(size);
+  Eigen::MatrixXd matrix(size, size), border(input.border.rows(), size);
+  for (auto _ : state) {
+    matrix.triangularView<Eigen::Lower>() = input.matrix;
+    border = input.border;
+    const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(matrix);
+    llt.matrixU().solveInPlace<Eigen::OnTheRight>(border);
+    benchmark::DoNotOptimize(border.data());
+  }
+}
+BENCHMARK(BM_EigenCholeskyAndSolve)->Arg(21)->Arg(24)->Arg(46)->Arg(81)->Arg(150)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
