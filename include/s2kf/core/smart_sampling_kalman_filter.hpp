@@ -83,6 +83,15 @@ struct UpdateOptions {
   /// (a group's components are consecutive), and each block of `block_size` must lie in one
   /// group. Null: every block is a group of its own. Read during update() only.
   const std::vector<int>* information_groups = nullptr;
+  /// The information form's shared second order: state coordinates (indices) whose pairwise
+  /// products delta_i delta_j every group's predictions depend on, such as the orientation of a
+  /// root that all groups hang from. The form then regresses the predictions on those d (d + 1) / 2
+  /// products as well (whitened over the samples) and carries them as that many more coordinates
+  /// of the information matrix, so their part of the predictions' nonlinearity, which the groups
+  /// share, is kept instead of left out; the state's posterior is their marginal. Taken with
+  /// symmetric sample sets (pairs +z, -z, on which the products are uncorrelated with the state);
+  /// at most 6 coordinates, each once. Null or empty: none. Read during update() only.
+  const std::vector<int>* information_quadratic_states = nullptr;
 };
 
 struct UpdateResult {
@@ -146,6 +155,10 @@ class FilterCore {
   /// Checks UpdateOptions::information_groups against the measurement and keeps them, with the
   /// largest group's size, for group_of and the moments.
   void set_groups(Eigen::Index m, const UpdateOptions& options);
+
+  /// Checks UpdateOptions::information_quadratic_states against the state and sets
+  /// quadratic_count_, the number of products the information form regresses on (0 without them).
+  void set_quadratic_states(Eigen::Index n, const UpdateOptions& options);
 
   /// The checks of update() and the observed components; a status other than ok ends the update.
   UpdateResult begin_update(Eigen::Index state_dimension, const Eigen::VectorXd& y, const Eigen::MatrixXd& r,
@@ -268,6 +281,11 @@ class FilterCore {
   /// single precision, in place in y_dev_ in double) for add_diagonal_block_moments.
   void accumulate_regression(bool single_precision);
 
+  /// UpdateOptions::information_quadratic_states, after accumulate_regression: the first
+  /// quadratic_count_ rows of regression_ set to the predictions' regression on the whitened
+  /// products delta_a delta_b of those states (pairs +z, -z: uncorrelated with z).
+  void accumulate_quadratic_regression(bool single_precision);
+
   /// The top-left rows x cols of a single-precision scratch matrix, grown when needed.
   static Eigen::Block<Eigen::MatrixXf> single_buffer(Eigen::MatrixXf& buffer, Eigen::Index rows,
                                                      Eigen::Index cols) {
@@ -295,7 +313,8 @@ class FilterCore {
   void reserve_moment_buffers(Eigen::Index m, Eigen::Index n, bool single_precision, bool information_form) {
     cyy_buffer(m);
     cyx_buffer(m, n);
-    bordered_.resize(std::max(m, n), n + 1);  // the gain's panel: Cyy, a group's D or the information matrix
+    // The gain's panel: Cyy, a group's D or the information matrix (with the products' rows).
+    bordered_.resize(std::max(m, n + quadratic_count_), n + quadratic_count_ + 1);
     const Eigen::Index count = samples_.count(), h = half_count_;
     if (single_precision) {
       single_buffer(y_dev_f_, m, count);
@@ -309,8 +328,18 @@ class FilterCore {
     if (!information_form) return;
     if (component_spread_.size() < m) component_spread_.resize(m);
     if (single_precision) single_buffer(component_spread_f_, m, 1);
-    if (regression_.rows() != n || regression_.cols() < m)
-      regression_.resize(n, std::max(regression_.cols(), m));
+    const Eigen::Index regressors = quadratic_count_ + n;  // the products first, then the state
+    if (regression_.rows() != regressors || regression_.cols() < m)
+      regression_.resize(regressors, std::max(regression_.cols(), m));
+    if (quadratic_count_ > 0) {
+      quadratic_features_.resize(quadratic_count_, half_count_);
+      if (pair_sum_.rows() < m || pair_sum_.cols() != half_count_) pair_sum_.resize(m, half_count_);
+      if (single_precision) {
+        single_buffer(quadratic_features_f_, quadratic_count_, half_count_);
+        single_buffer(pair_sum_f_, m, half_count_);
+        single_buffer(quadratic_cross_f_, quadratic_count_, m);
+      }
+    }
     Eigen::MatrixXd& products = block_products_;
     Eigen::MatrixXf& products_f = block_products_f_;
     if (products.rows() < m || products.cols() < group_width_) products.resize(m, group_width_);
@@ -376,6 +405,12 @@ class FilterCore {
   // n x n system and the products per block (see add_diagonal_block_moments).
   Eigen::MatrixXd scaled_points_, regression_, block_products_;
   Eigen::MatrixXf scaled_points_f_, regression_f_, block_products_f_, component_spread_f_;
+  // UpdateOptions::information_quadratic_states: sqrt(w) times the products of each + sample, the
+  // pair sums sqrt(w) (y+_k + y-_k - 2 y^) and the products' cross moments with them.
+  const std::vector<int>* quadratic_states_ = nullptr;
+  Eigen::Index quadratic_count_ = 0;
+  Eigen::MatrixXd quadratic_features_, pair_sum_;
+  Eigen::MatrixXf quadratic_features_f_, pair_sum_f_, quadratic_cross_f_;
   BorderedCholesky bordered_;  ///< Cyy, or a large group's D_g and then the information matrix
   Eigen::VectorXd state_step_;
   Eigen::Index observed_count_ = 0;
@@ -566,6 +601,7 @@ S2KF_INLINE UpdateResult FilterCore::begin_update(Eigen::Index state_dimension, 
   if (options.block_size < 1 || m % options.block_size != 0)
     throw DimensionError("update: the block size must divide the measurement dimension");
   set_groups(m, options);
+  set_quadratic_states(n, options);
 
   UpdateResult result;
   rejected_blocks_.clear();
@@ -681,6 +717,25 @@ S2KF_INLINE void FilterCore::set_groups(Eigen::Index m, const UpdateOptions& opt
   }
 }
 
+S2KF_INLINE void FilterCore::set_quadratic_states(Eigen::Index n, const UpdateOptions& options) {
+  quadratic_states_ = options.information_quadratic_states;
+  quadratic_count_ = 0;
+  if (quadratic_states_ == nullptr || quadratic_states_->empty()) return;
+  const std::vector<int>& states = *quadratic_states_;
+  if (states.size() > 6) throw DimensionError("update: at most 6 information_quadratic_states");
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    if (states[i] < 0 || states[i] >= n)
+      throw DimensionError("update: information_quadratic_states names state " + std::to_string(states[i]) +
+                           " of " + std::to_string(n));
+    for (std::size_t j = 0; j < i; ++j)
+      if (states[j] == states[i])
+        throw DimensionError("update: state " + std::to_string(states[i]) +
+                             " appears twice in information_quadratic_states");
+  }
+  const auto d = static_cast<Eigen::Index>(states.size());
+  if (options.information_form && symmetric_) quadratic_count_ = d * (d + 1) / 2;
+}
+
 S2KF_INLINE bool FilterCore::information_form_applies(const Eigen::MatrixXd& r,
                                                       const UpdateOptions& options) const {
   if (!options.information_form || !positive_weights_ || !unit_moments_ || options.iterations > 1)
@@ -737,9 +792,11 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
                                                            const UpdateOptions& options,
                                                            UpdateResult result) {
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
-  const Eigen::Index n = mean.size(), mo = result.observed;
+  const Eigen::Index n = mean.size(), mo = result.observed, p = quadratic_count_, na = p + n;
   // In the whitened coordinates u = S^-1 (x - m) the prior is N(0, I) and the predictions regress
-  // on u with G (regression_ holds G^T, one column per observed component).
+  // on u with G (regression_ holds G^T, one column per observed component), and on the whitened
+  // products q~ (UpdateOptions::information_quadratic_states, prior N(0, I) too, uncorrelated
+  // with u) in its first p rows: below, G stands for both, [H~ G].
   auto gt = regression_.leftCols(mo);
   auto innovation = innovation_.head(mo);
   for (Eigen::Index k = 0; k < mo; ++k) innovation(k) = y(index_(k)) - y_mean_(k);
@@ -767,17 +824,17 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
   // A large group (a limb's markers): D_b formed in the panel of the bordered factorisation, with
   // G_b^T and the innovation as its border, so that one pass gives L_b, G_b^T L_b^-T and L_b^-1 e_b.
   const auto whiten_group = [&](Eigen::Index k, Eigen::Index d) {
-    bordered_.resize(d, n + 1);
+    bordered_.resize(d, na + 1);
     auto panel = bordered_.panel();
     auto d_group = panel.topRows(d);
     auto g_group = gt.middleCols(k, d);
     d_group.template triangularView<Eigen::Lower>() = cyy_.block(k, k, d, d);
     d_group.template selfadjointView<Eigen::Lower>().rankUpdate(g_group.transpose(), -1.0);
-    panel.middleRows(d, n) = g_group;
-    panel.row(d + n) = innovation.segment(k, d).transpose();
+    panel.middleRows(d, na) = g_group;
+    panel.row(d + na) = innovation.segment(k, d).transpose();
     if (!bordered_.factorise()) return false;
-    g_group = panel.middleRows(d, n);
-    innovation.segment(k, d) = panel.row(d + n).transpose();
+    g_group = panel.middleRows(d, na);
+    innovation.segment(k, d) = panel.row(d + na).transpose();
     return true;
   };
   for (Eigen::Index k = 0; k < mo;) {
@@ -799,28 +856,32 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
   // M = I + W^T W with W = D^-1/2 G; u+ = M^-1 W^T e; NIS = e^T (G G^T + D)^-1 e by Woodbury.
   // M = L_M L_M^T is factorised with the prior's factor S and v = W^T e as its border, giving
   // T = S L_M^-T and t = L_M^-1 v: then the NIS is |e|^2 - |t|^2, the step S M^-1 v = T t and the
-  // posterior covariance S M^-1 S^T = T T^T.
-  bordered_.resize(n, n + 1);
+  // posterior covariance S M^-1 S^T = T T^T. With the products first, the factor's trailing block
+  // L_uu factorises the state's Schur complement, so the border [0 S] gives [0, S L_uu^-T]: the
+  // state's marginal posterior T T^T and step T t_u, the products integrated out.
+  bordered_.resize(na, n + 1);
   auto panel = bordered_.panel();
-  auto information = panel.topRows(n);
+  auto information = panel.topRows(na);
   information.setIdentity();
   rank_update_lower(information, gt);
-  panel.middleRows(n, n).template triangularView<Eigen::Lower>() = factor_.matrixL();
-  panel.middleRows(n, n).template triangularView<Eigen::StrictlyUpper>().setZero();
-  panel.row(2 * n).noalias() = innovation.transpose() * gt.transpose();
+  auto prior_factor = panel.middleRows(na, n);
+  prior_factor.leftCols(p).setZero();
+  prior_factor.rightCols(n).template triangularView<Eigen::Lower>() = factor_.matrixL();
+  prior_factor.rightCols(n).template triangularView<Eigen::StrictlyUpper>().setZero();
+  panel.row(na + n).noalias() = innovation.transpose() * gt.transpose();
   if (!bordered_.factorise()) {
     result.status = FilterStatus::innovation_not_positive_definite;
     return result;
   }
-  const auto whitening = panel.middleRows(n, n);
-  const auto whitened_information = panel.row(2 * n).transpose();
+  const auto whitening = panel.block(na, p, n, n);
+  const auto whitened_information = panel.row(na + n).transpose();
   result.nis = std::max(0.0, innovation.squaredNorm() - whitened_information.squaredNorm());
   if (gated(result.nis, mo, options)) {
     result.status = FilterStatus::gated;
     return result;
   }
-  // mean += S u+ = T t, C+ = T T^T.
-  state_step_.noalias() = whitening * whitened_information;
+  // mean += S u+ = T t_u, C+ = T T^T.
+  state_step_.noalias() = whitening * whitened_information.tail(n);
   posterior_covariance_.setZero(n, n);
   posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(whitening);
   if (!complete_posterior_is_positive_definite()) {
@@ -969,7 +1030,8 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
 S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
   const Eigen::Index mo = observed_count_, n = samples_.dimension(), count = samples_.count();
   auto y_dev = y_dev_.topRows(mo);
-  auto regression = regression_.leftCols(mo);  // sized by reserve_moment_buffers
+  // Sized by reserve_moment_buffers: the products' rows first (accumulate_quadratic_regression).
+  auto regression = regression_.block(quadratic_count_, 0, n, mo);
   // Pairs +z_k, -z_k with equal weights: sum over a pair of w z (y_i - y^)^T is
   // w z_k (y+_k - y-_k)^T, so G^T costs half the product over all samples.
   const Eigen::Index h = half_count_, o = origin_count_;
@@ -1004,6 +1066,7 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
       product(regression_f, scaled_points_f_, y_dev_f);
     }
     regression = regression_f.template cast<double>();
+    if (quadratic_count_ > 0) accumulate_quadratic_regression(true);
     return;
   }
   scale_columns_by_sqrt_weights(y_dev);
@@ -1015,6 +1078,62 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
     product(regression, scaled_points_, pair_difference);
   } else {
     product(regression, scaled_points_, y_dev);
+  }
+  if (quadratic_count_ > 0) accumulate_quadratic_regression(false);
+}
+
+S2KF_INLINE void FilterCore::accumulate_quadratic_regression(bool single_precision) {
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 21, 21>;
+  using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 21, 1>;
+  const Eigen::Index mo = observed_count_, p = quadratic_count_, h = half_count_, o = origin_count_;
+  const std::vector<int>& states = *quadratic_states_;
+  const auto d = static_cast<Eigen::Index>(states.size());
+  // f_k = sqrt(w_k) q_k, q_k the products delta_a delta_b (a <= b) of the + sample's deviations
+  // S z_k (half_deviation_, not yet scaled); the - sample has the same products.
+  auto features = quadratic_features_.leftCols(h);
+  for (Eigen::Index k = 0; k < h; ++k) {
+    const double scale = sqrt_weights_(o + k);
+    Eigen::Index row = 0;
+    for (Eigen::Index a = 0; a < d; ++a)
+      for (Eigen::Index b = a; b < d; ++b)
+        features(row++, k) = scale * half_deviation_(states[static_cast<std::size_t>(a)], k) *
+                             half_deviation_(states[static_cast<std::size_t>(b)], k);
+  }
+  // Over all samples (the origin's products are zero): mean 2 sum_k w_k q_k, covariance
+  // 2 F F^T - mean mean^T, and the cross moment with the predictions
+  // sum_k w_k q_k (y+_k + y-_k - 2 y^)^T = F P^T, P the scaled pair sums (the mean of the
+  // deviations is zero, so the products need no centring there).
+  SmallVector mean = 2.0 * (features * sqrt_weights_.segment(o, h));
+  Small covariance = 2.0 * features * features.transpose();
+  covariance -= mean * mean.transpose();
+  auto cross = regression_.topLeftCorner(p, mo);
+  if (single_precision) {
+    auto y_dev_f = y_dev_f_.topLeftCorner(mo, samples_.count());
+    auto pair_sum_f = single_buffer(pair_sum_f_, mo, h);
+    pair_sum_f.noalias() = y_dev_f.middleCols(o, h) + y_dev_f.rightCols(h);
+    auto features_f = single_buffer(quadratic_features_f_, p, h);
+    features_f = features.template cast<float>();
+    auto cross_f = single_buffer(quadratic_cross_f_, p, mo);
+    cross_f.noalias() = features_f * pair_sum_f.transpose();
+    cross = cross_f.template cast<double>();
+  } else {
+    auto y_dev = y_dev_.topRows(mo);  // scaled by sqrt(w) already
+    auto pair_sum = pair_sum_.topRows(mo);
+    pair_sum.noalias() = y_dev.middleCols(o, h) + y_dev.rightCols(h);
+    cross.noalias() = features * pair_sum.transpose();
+  }
+  // Whitened products q~ = L_q^-1 (q - mean), Cov(q~) = I: their regression is L_q^-1 times the
+  // cross moment. Products the samples do not spread (a state without variance) add nothing.
+  covariance.diagonal().array() += 1e-12 * covariance.trace() / static_cast<double>(p);
+  const Eigen::LLT<Small> factor(covariance);
+  if (factor.info() != Eigen::Success || !(covariance.trace() > 0)) {
+    cross.setZero();
+    return;
+  }
+  const auto& l = factor.matrixLLT();
+  for (Eigen::Index i = 0; i < p; ++i) {
+    for (Eigen::Index j = 0; j < i; ++j) cross.row(i) -= l(i, j) * cross.row(j);
+    cross.row(i) /= l(i, i);
   }
 }
 

@@ -185,6 +185,9 @@ class Tracker {
   body::MarkerMeasurementModel mean_markers_model_;  ///< every model marker, for the reported pose
   std::vector<int> used_markers_;        ///< model markers in the measurement, body part by body part
   std::vector<int> information_groups_;  ///< per measurement component: its marker's body part
+  /// The state's orientation error (3-5): every body part hangs from it, so the second order of
+  /// its error is the nonlinearity the parts share (UpdateOptions::information_quadratic_states).
+  std::vector<int> root_orientation_states_ = {3, 4, 5};
   GaussianXd state_;                     ///< the pose posterior (what the update works on)
   GaussianXd motion_;                    ///< constant velocity: [pose, rates]; its pose part
                                          ///< equals state_ between frames
@@ -347,6 +350,7 @@ S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points
   update_options.information_form = options_.information_form_update;
   update_options.information_form_max_nonlinearity = options_.information_form_max_nonlinearity;
   update_options.information_groups = &information_groups_;
+  if (options_.information_form_root_products) update_options.information_quadratic_states = &root_orientation_states_;
   ++frames_since_start_;
   estimate_.status = FilterStatus::nothing_observed;
   estimate_.nis = std::numeric_limits<double>::quiet_NaN();

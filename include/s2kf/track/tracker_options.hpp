@@ -90,6 +90,11 @@ struct TrackerOptions {
   /// mean of 24 simulated cases within 1 % of the ordinary update's and no limit did not, while 1
   /// sent most of the handstand's frames to the ordinary update as well (docs/benchmarks.md).
   double information_form_max_nonlinearity = 2.0;
+  /// The information form regresses the predictions on the products of the root's orientation
+  /// error as well (UpdateOptions::information_quadratic_states): the second order of the
+  /// orientation, which every body part shares, is then kept instead of left out with the other
+  /// cross-part correlations.
+  bool information_form_root_products = false;
 
   /// After every update each joint's Theta is kept learnable (keep_joint_parameters_learnable):
   /// its mean at least this far (rad) inside +-pi/2, where the sine's slope vanishes and a joint
