@@ -48,8 +48,9 @@ const RegisterCommand evaluate_registration{
       app.add_option("--gain", settings->gain,
                      "S2KF update: information-form (default: the 46 x 46 state system and each body "
                      "part's block of the innovation covariance) or square-root (the whole innovation "
-                     "covariance factorised)")
-          ->check(CLI::IsMember({"information-form", "square-root"}));
+                     "covariance factorised) or information-form-root-products (also the second order of the "
+                     "root's orientation, which the parts share)")
+          ->check(CLI::IsMember({"information-form", "square-root", "information-form-root-products"}));
       app.add_flag("--smooth", settings->smooth,
                    "also track with the RTS smoother and compare it with the truth");
       app.callback([settings] { run_evaluate(*settings); });

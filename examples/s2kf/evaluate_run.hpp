@@ -23,7 +23,7 @@ struct EvaluateSettings {
   std::string occlusion;           ///< p,lambda: random occlusion of the simulated recording
   bool smooth = false;             ///< also the S2KF with the RTS smoother, against the truth
   std::string motion_model = "random-walk";
-  std::string gain = "information-form";  ///< or square-root (TrackerOptions::information_form_update)
+  std::string gain = "information-form";  ///< square-root, information-form-root-products (TrackerOptions)
 };
 
 void run_evaluate(const EvaluateSettings& settings);

@@ -21,7 +21,7 @@ struct TrackSettings {
   int samples = 0;       // 0: the preset's
   std::string preset = "default";
   std::string motion_model;               // empty: the preset's
-  std::string gain = "information-form";  // or square-root (TrackerOptions::information_form_update)
+  std::string gain = "information-form";  // square-root, information-form-root-products (TrackerOptions)
   std::string method = "s2kf";
   std::string markerset;  // empty: the bundled set that matches best
   std::string subject;    // a calibrated subject file (s2kf calibrate)
