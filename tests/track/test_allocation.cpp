@@ -116,7 +116,9 @@ TEST(TrackerAllocation, TheCounterSeesVectorsAndEigenMatrices) {
 #endif
 }
 
-TEST(TrackerAllocation, SteadyStateFramesWithChangingOcclusionAllocateNothing) {
+// Frames of the handstand with hidden blocks that change every frame, through a tracker with
+// `options`: no allocation once the first frames have sized the buffers.
+void expect_steady_state_frames_to_allocate_nothing(const track::TrackerOptions& options) {
   const c3d::Recording recording = c3d::read_c3d(std::string(S2KF_DATA_DIR) + "/handstand.c3d");
   std::vector<std::string> labels;
   for (const auto& label : recording.info.labels) labels.push_back(label.name);
@@ -127,8 +129,7 @@ TEST(TrackerAllocation, SteadyStateFramesWithChangingOcclusionAllocateNothing) {
     heights.add_frame(recording.frame(f), recording.visible.col(f));
   model = model.scaled(heights.height_mm().value_or(1750));
   ASSERT_EQ(mapping.markers_used(), 50);
-  track::Tracker tracker(model, mapping, track::TrackerOptions{}, recording.info.rate,
-                         test::tracker_samples());
+  track::Tracker tracker(model, mapping, options, recording.info.rate, test::tracker_samples());
 
   // Frames and visibility prepared up front: hidden blocks of 0..24 markers that move every frame,
   // one frame with every marker hidden and one with a NaN coordinate on a "visible" marker.
@@ -198,6 +199,16 @@ TEST(TrackerAllocation, SteadyStateFramesWithChangingOcclusionAllocateNothing) {
   ASSERT_GT(distances, 0);
   EXPECT_NEAR(e.mean_marker_distance, mean_distance / distances, 1e-9);
   EXPECT_LT(e.mean_marker_distance, 60.0);  // still tracking (measured about 20 mm)
+}
+
+TEST(TrackerAllocation, SteadyStateFramesWithChangingOcclusionAllocateNothing) {
+  expect_steady_state_frames_to_allocate_nothing(track::TrackerOptions{});
+}
+
+TEST(TrackerAllocation, NorWithTheRootsProductsInTheInformationForm) {
+  track::TrackerOptions options;
+  options.information_form_root_products = true;
+  expect_steady_state_frames_to_allocate_nothing(options);
 }
 
 }  // namespace
