@@ -24,12 +24,14 @@ namespace s2kf {
 class BorderedCholesky {
  public:
   /// Rows of one register tile: four columns of this many doubles are 16 AVX-512 registers (the
-  /// machine has 32) or 16 SSE/AVX registers of 8 doubles in all.
+  /// machine has 32) or 16 SSE/AVX registers of 8 doubles in all. The panel's rows are padded to
+  /// a multiple of kPadRows only: the last rows go in tiles of that many.
 #if defined(__AVX512F__)
   static constexpr Eigen::Index kTileRows = 32;
 #else
   static constexpr Eigen::Index kTileRows = 8;
 #endif
+  static constexpr Eigen::Index kPadRows = 8;
   static constexpr Eigen::Index kTileColumns = 4;
 
   /// Prepares a panel for a `size` x `size` matrix with `border` rows beneath it.
@@ -50,7 +52,7 @@ class BorderedCholesky {
   /// above zero, or NaN); the panel is then unspecified.
   bool factorise() {
     const Eigen::Index stride = storage_.rows(), padded = padded_rows(rows_);
-    // The tiles run over whole multiples of kTileRows rows: the rows below the border are zeroed,
+    // The tiles run over whole multiples of kPadRows rows: the rows below the border are zeroed,
     // and zero rows stay zero under the updates and the division by the pivots.
     storage_.block(rows_, 0, padded - rows_, size_).setZero();
     double* p = storage_.data();
@@ -63,7 +65,7 @@ class BorderedCholesky {
   }
 
  private:
-  static Eigen::Index padded_rows(Eigen::Index rows) { return (rows + kTileRows - 1) / kTileRows * kTileRows; }
+  static Eigen::Index padded_rows(Eigen::Index rows) { return (rows + kPadRows - 1) / kPadRows * kPadRows; }
 
   /// Columns j..j+width of the panel, from the first tile holding row j down: minus the sum over
   /// the earlier columns k of p(j + c, k) p(:, k), four target columns per pass over a column k so
@@ -71,23 +73,30 @@ class BorderedCholesky {
   static void subtract_earlier_columns(double* p, Eigen::Index stride, Eigen::Index padded, Eigen::Index j,
                                        Eigen::Index width) {
     if (j == 0) return;
-    constexpr Eigen::Index R = kTileRows, W = kTileColumns;
-    double* target[W];
-    for (Eigen::Index c = 0; c < W; ++c) target[c] = p + (j + std::min(c, width - 1)) * stride;
+    double* target[kTileColumns];
+    for (Eigen::Index c = 0; c < kTileColumns; ++c) target[c] = p + (j + std::min(c, width - 1)) * stride;
+    Eigen::Index r = j / kPadRows * kPadRows;
+    for (; r + kTileRows <= padded; r += kTileRows) subtract_tile<kTileRows>(p, stride, r, j, width, target);
+    for (; r < padded; r += kPadRows) subtract_tile<kPadRows>(p, stride, r, j, width, target);
+  }
+
+  /// One tile of R rows from row r: the four columns' tile stays in registers while every earlier
+  /// column passes once.
+  template <Eigen::Index R>
+  static void subtract_tile(const double* p, Eigen::Index stride, Eigen::Index r, Eigen::Index j, Eigen::Index width,
+                            double* const* target) {
+    constexpr Eigen::Index W = kTileColumns;
     using Tile = Eigen::Matrix<double, R, W>;
     using TileColumn = Eigen::Matrix<double, R, 1>;
-    for (Eigen::Index r = j / R * R; r < padded; r += R) {
-      // The tile of four columns stays in registers while every earlier column passes once.
-      Tile tile;
-      for (Eigen::Index c = 0; c < W; ++c) tile.col(c) = Eigen::Map<const TileColumn>(target[c] + r);
-      for (Eigen::Index k = 0; k < j; ++k) {
-        const double* column = p + k * stride;
-        Eigen::Matrix<double, 1, W> factor;
-        for (Eigen::Index c = 0; c < W; ++c) factor(c) = column[j + std::min(c, width - 1)];
-        tile.noalias() -= Eigen::Map<const TileColumn>(column + r) * factor;
-      }
-      for (Eigen::Index c = 0; c < width; ++c) Eigen::Map<TileColumn>(target[c] + r) = tile.col(c);
+    Tile tile;
+    for (Eigen::Index c = 0; c < W; ++c) tile.col(c) = Eigen::Map<const TileColumn>(target[c] + r);
+    for (Eigen::Index k = 0; k < j; ++k) {
+      const double* column = p + k * stride;
+      Eigen::Matrix<double, 1, W> factor;
+      for (Eigen::Index c = 0; c < W; ++c) factor(c) = column[j + std::min(c, width - 1)];
+      tile.noalias() -= Eigen::Map<const TileColumn>(column + r) * factor;
     }
+    for (Eigen::Index c = 0; c < width; ++c) Eigen::Map<TileColumn>(target[c] + r) = tile.col(c);
   }
 
   /// The columns j..j+width among themselves: each minus the earlier ones of the group, then
