@@ -8,8 +8,8 @@
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 
-#include <Eigen/Cholesky>
 #include <benchmark/benchmark.h>
+#include <Eigen/Cholesky>
 
 #include <random>
 
@@ -88,7 +88,13 @@ void BM_EigenCholeskyAndSolve(benchmark::State& state) {
     benchmark::DoNotOptimize(border.data());
   }
 }
-BENCHMARK(BM_EigenCholeskyAndSolve)->Arg(21)->Arg(24)->Arg(46)->Arg(81)->Arg(150)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_EigenCholeskyAndSolve)
+    ->Arg(21)
+    ->Arg(24)
+    ->Arg(46)
+    ->Arg(81)
+    ->Arg(150)
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

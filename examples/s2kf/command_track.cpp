@@ -83,12 +83,13 @@ const RegisterCommand track_registration{
       app.add_option("--motion-model", settings->motion_model,
                      "S2KF system model: random-walk (default) or constant-velocity (docs/tracking.md)")
           ->check(CLI::IsMember({"random-walk", "constant-velocity"}));
-      app.add_option("--gain", settings->gain,
-                     "S2KF update: information-form (default: the 46 x 46 state system and each body "
-                     "part's block of the innovation covariance) or square-root (the whole innovation "
-                     "covariance factorised; slower, docs/benchmarks.md) or information-form-root-products (the "
-                     "information form that also keeps the second order of the root's orientation the "
-                     "parts share; nearer the square-root update, slower than information-form)")
+      app.add_option(
+             "--gain", settings->gain,
+             "S2KF update: information-form (default: the 46 x 46 state system and each body "
+             "part's block of the innovation covariance) or square-root (the whole innovation "
+             "covariance factorised; slower, docs/benchmarks.md) or information-form-root-products (the "
+             "information form that also keeps the second order of the root's orientation the "
+             "parts share; nearer the square-root update, slower than information-form)")
           ->check(CLI::IsMember({"information-form", "square-root", "information-form-root-products"}));
       app.add_option("--method", settings->method, "s2kf, or baseline (per-frame Levenberg-Marquardt)")
           ->check(CLI::IsMember({"s2kf", "baseline"}));

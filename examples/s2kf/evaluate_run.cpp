@@ -174,8 +174,7 @@ void run_evaluate(const EvaluateSettings& settings) {
     track::SessionOptions options;
     options.calibrate = settings.calibrate;
     options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
-    options.tracker.information_form_update = settings.gain != "square-root";
-    options.tracker.information_form_root_products = settings.gain == "information-form-root-products";
+    track::set_gain_from_name(options.tracker, settings.gain);
     setup =
         track::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {

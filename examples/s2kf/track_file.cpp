@@ -119,8 +119,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (settings.samples > 0) session_options.tracker.samples = settings.samples;
   if (!settings.motion_model.empty())
     session_options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
-  session_options.tracker.information_form_update = settings.gain != "square-root";
-  session_options.tracker.information_form_root_products = settings.gain == "information-form-root-products";
+  track::set_gain_from_name(session_options.tracker, settings.gain);
   session_options.height_mm = settings.height_mm;
   session_options.calibrate = settings.calibrate && settings.subject.empty();
   session_options.calibration_frames = settings.calibration_frames;

@@ -89,9 +89,7 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
       {"smoothed", smoothed},
       {"preset", session.tracker.preset},
       {"motion_model", track::to_string(session.tracker.motion_model)},
-      {"gain", !session.tracker.information_form_update          ? "square-root"
-               : session.tracker.information_form_root_products ? "information-form-root-products"
-                                                                 : "information-form"},
+      {"gain", track::gain_name(session.tracker)},
       {"frames", run.frames},
       {"frames_tracked", run.frames_tracked},
       {"rate", session.rate_hz},

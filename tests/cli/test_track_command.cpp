@@ -224,9 +224,9 @@ TEST(TrackCommand, EachGainIsRecordedAndTracksTheRecording) {
   std::map<std::string, double> distance;
   for (const std::string gain : {"square-root", "information-form", "information-form-root-products"}) {
     const fs::path out = scratch("gains") / gain;
-    const CommandResult r = run_command("track " + data_file("handstand.c3d") +
-                                        " --no-calibrate --formats csv --gain " + gain +
-                                        " --out " + out.string());
+    const CommandResult r =
+        run_command("track " + data_file("handstand.c3d") + " --no-calibrate --formats csv --gain " + gain +
+                    " --out " + out.string());
     ASSERT_EQ(r.status, 0) << r.output;
     const auto summary = nlohmann::json::parse(read_text(out.string() + ".json"));
     EXPECT_EQ(summary["gain"].get<std::string>(), gain);
@@ -235,7 +235,8 @@ TEST(TrackCommand, EachGainIsRecordedAndTracksTheRecording) {
   }
   EXPECT_LT(distance["square-root"], 30.0);
   EXPECT_NEAR(distance["information-form"], distance["square-root"], 0.05 * distance["square-root"]);
-  EXPECT_NEAR(distance["information-form-root-products"], distance["square-root"], 0.05 * distance["square-root"]);
+  EXPECT_NEAR(distance["information-form-root-products"], distance["square-root"],
+              0.05 * distance["square-root"]);
 }
 
 TEST(TrackCommand, ReportsTheAccuracyAgainstAGivenTruth) {

@@ -1,7 +1,7 @@
 #include <s2kf/core/bordered_cholesky.hpp>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include <limits>
 #include <random>
@@ -54,7 +54,8 @@ TEST(BorderedCholesky, GivesTheCholeskyFactorAndTheBorderSolvedAgainstItsTranspo
       const Eigen::MatrixXd factor = panel.topRows(size).triangularView<Eigen::Lower>();
       EXPECT_LT((factor - l).norm(), 1e-13 * l.norm()) << size << " + " << border;
       if (border > 0) {
-        EXPECT_LT((panel.bottomRows(border) - solved).norm(), 1e-12 * solved.norm()) << size << " + " << border;
+        EXPECT_LT((panel.bottomRows(border) - solved).norm(), 1e-12 * solved.norm())
+            << size << " + " << border;
       }
       // And the defining identities, independently of Eigen's factorisation.
       EXPECT_LT((factor * factor.transpose() - a).norm(), 1e-13 * a.norm());

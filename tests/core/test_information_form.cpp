@@ -470,12 +470,11 @@ TEST(InformationForm, QuadraticStatesThatDoNotFitTheStateAreRefused) {
   const Eigen::VectorXd y = random_matrix(m, 1, rng);
   S2kf filter(s2kf::compute_lcd_sample_set(n, 31).set);
   UpdateOptions options = information_form(3);
-  for (const std::vector<int>& states :
-       {std::vector<int>{4}, std::vector<int>{-1}, std::vector<int>{1, 1}, std::vector<int>{0, 1, 2, 3, 0, 1, 2}}) {
+  for (const std::vector<int>& states : {std::vector<int>{4}, std::vector<int>{-1}, std::vector<int>{1, 1},
+                                         std::vector<int>{0, 1, 2, 3, 0, 1, 2}}) {
     options.information_quadratic_states = &states;
     GaussianXd s = prior;
     EXPECT_THROW(filter.update(s, model, y, r, options), s2kf::DimensionError);
     EXPECT_EQ(s.mean, prior.mean);
   }
 }
-

@@ -2,13 +2,14 @@
 /// The bordered partial Cholesky factorisation: a symmetric positive-definite matrix A = L L^T and
 /// the rows B beneath it solved against L^T, B L^-T, in one pass over one panel.
 ///
-/// The information form needs exactly this per group of measurements (L the factor of D_g, the
-/// group's regression G_g^T and innovation as the border) and once more for the n x n information
-/// matrix (the prior's factor S and the information vector as the border). Eigen's LLT followed
-/// by a triangular solve does the same arithmetic, but at these sizes (20-130 rows) both run
-/// far below the machine's multiply-add rate; this left-looking factorisation computes four
-/// columns at a time over row tiles that stay in registers and is 2-2.5 times faster than the
-/// two calls together (measured in docs/benchmarks.md).
+/// Every gain of the filter needs exactly this: the square-root gain with Cyy on top and Cyx^T
+/// and the innovation as the border; the information form per group of measurements (L the factor
+/// of D_g, the group's regression G_g^T and innovation as the border) and once more for the n x n
+/// information matrix (the prior's factor S and the information vector as the border). Eigen's
+/// LLT followed by a triangular solve does the same arithmetic, but at these sizes (20-200 rows)
+/// both run far below the machine's multiply-add rate; this left-looking factorisation computes
+/// four columns at a time over row tiles that stay in registers and is 1.9-2.5 times faster than
+/// the two calls together (measured in docs/benchmarks.md).
 #pragma once
 
 #include <Eigen/Core>
@@ -83,8 +84,8 @@ class BorderedCholesky {
   /// One tile of R rows from row r: the four columns' tile stays in registers while every earlier
   /// column passes once.
   template <Eigen::Index R>
-  static void subtract_tile(const double* p, Eigen::Index stride, Eigen::Index r, Eigen::Index j, Eigen::Index width,
-                            double* const* target) {
+  static void subtract_tile(const double* p, Eigen::Index stride, Eigen::Index r, Eigen::Index j,
+                            Eigen::Index width, double* const* target) {
     constexpr Eigen::Index W = kTileColumns;
     using Tile = Eigen::Matrix<double, R, W>;
     using TileColumn = Eigen::Matrix<double, R, 1>;

@@ -350,7 +350,8 @@ S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points
   update_options.information_form = options_.information_form_update;
   update_options.information_form_max_nonlinearity = options_.information_form_max_nonlinearity;
   update_options.information_groups = &information_groups_;
-  if (options_.information_form_root_products) update_options.information_quadratic_states = &root_orientation_states_;
+  if (options_.information_form_root_products)
+    update_options.information_quadratic_states = &root_orientation_states_;
   ++frames_since_start_;
   estimate_.status = FilterStatus::nothing_observed;
   estimate_.nis = std::numeric_limits<double>::quiet_NaN();

@@ -170,6 +170,21 @@ struct TrackerOptions {
   }
 };
 
+/// The gain by its command-line name: information-form (TrackerOptions' default), square-root, or
+/// information-form-root-products (information_form_update, information_form_root_products).
+inline void set_gain_from_name(TrackerOptions& options, const std::string& name) {
+  if (name != "information-form" && name != "square-root" && name != "information-form-root-products")
+    throw std::invalid_argument("unknown gain '" + name +
+                                "' (use information-form, square-root or information-form-root-products)");
+  options.information_form_update = name != "square-root";
+  options.information_form_root_products = name == "information-form-root-products";
+}
+
+inline std::string gain_name(const TrackerOptions& options) {
+  if (!options.information_form_update) return "square-root";
+  return options.information_form_root_products ? "information-form-root-products" : "information-form";
+}
+
 /// The seed paper's numbers (its section 5), read with R in m^2 (1e-4 m^2 = (10 mm)^2),
 /// Q_r = 25 mm^2 per frame, and 1e-10 for orientation and joints per frame; initial orientation 0
 /// with variance 1e-6, joints at mid-range with variance 1e-10, root from the marker mean. They are
