@@ -52,7 +52,9 @@ for occluded in modes:
                         "s2kf_smoothed": summary["s2kf_smoothed"],
                         "true_subject_reference": summary["true_subject_reference"],
                         "identifiable_subject_reference": summary.get("identifiable_subject_reference"),
-                        "tracker_model_reference": summary.get("tracker_model_reference")})
+                        "tracker_model_reference": summary.get("tracker_model_reference"),
+                        "constant_placement_reference": summary.get("constant_placement_reference"),
+                        "calibration_at_true_poses_reference": summary.get("calibration_at_true_poses_reference")})
             if "error_by_time_hidden" in summary:
                 raw[-1]["error_by_time_hidden"] = summary["error_by_time_hidden"]
             rows.append((occluded, motion, seed, summary["s2kf"]["truth"], summary["s2kf_smoothed"],

@@ -36,6 +36,7 @@ struct CalibrateSettings {
   bool quiet = false;
   bool no_scales = false;
   double shrink = track::CalibrationOptions{}.weak_direction_shrink;
+  bool noise_from_calibration = true;
 };
 
 std::string fixed(double value, int precision) {
@@ -63,6 +64,7 @@ void run_calibrate(const CalibrateSettings& settings) {
   options.calibration.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   options.calibration.estimate_segment_scales = !settings.no_scales;
   options.calibration.weak_direction_shrink = settings.shrink;
+  options.noise_from_calibration = settings.noise_from_calibration;
   track::Session session;
   try {
     session =
@@ -77,7 +79,8 @@ void run_calibrate(const CalibrateSettings& settings) {
 
   const std::string name = fs::path(settings.out).stem().string();
   const body::MarkerSet subject =
-      subject_marker_set(choice.set, calibration.model, calibration.segment_scale, name);
+      subject_marker_set(choice.set, calibration.model, calibration.segment_scale,
+                         session.tracker.marker_noise_mm_per_marker, name);
   nlohmann::json document = marker_set_to_json(subject);
   nlohmann::json passes = nlohmann::json::array();
   for (const track::CalibrationPass& pass : calibration.passes)
@@ -152,6 +155,9 @@ const RegisterCommand calibrate_registration{
                      "pull the marker offsets the recording sees only weakly towards the marker set: "
                      "a direction keeps mu / (mu + C) of the data's step (default 0.03; 0: none)")
           ->check(CLI::Range(0.0, 1e6));
+      app.add_flag("!--uniform-noise", settings->noise_from_calibration,
+                   "write no per-marker noise into the subject file (default: each marker's noise_mm "
+                   "follows its calibration residual, 0.5-2 times the tracker's common 10 mm)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
       app.callback([settings] { run_calibrate(*settings); });
     }};

@@ -173,6 +173,7 @@ void run_evaluate(const EvaluateSettings& settings) {
     const MarkerSetChoice choice = choose_marker_set_for(complete.labels, "", "");
     track::SessionOptions options;
     options.calibrate = settings.calibrate;
+    options.noise_from_calibration = settings.noise_from_calibration;
     options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
     track::set_gain_from_name(options.tracker, settings.gain);
     setup =
@@ -218,6 +219,7 @@ void run_evaluate(const EvaluateSettings& settings) {
 
   // The reachable reference (simulated input only) and the smoothed S2KF, against the truth.
   std::optional<track::TruthComparison> reference, smoothed, model_fit;
+  json constant_placement = nullptr, at_true_poses = nullptr;
   json identifiable = json::array();
   // How the segments' error grows with the time their markers have been hidden (the input's own
   // occlusion; everything lands in the first bin without it).
@@ -233,6 +235,13 @@ void run_evaluate(const EvaluateSettings& settings) {
                                           *truth, settings.warmup);
     say("true-subject fit: segment orientation RMS " + cell(reference->segment_orientation_rms_deg) + " deg");
     identifiable = identifiable_references(setup, *simulated, *truth, settings.warmup);
+    constant_placement = constant_placement_reference(setup, *simulated, *truth, settings.warmup);
+    say("best-constant-placement fit: segment orientation RMS " +
+        cell(constant_placement["truth"]["segment_orientation_rms_deg"].get<double>()) + " deg");
+    at_true_poses = calibration_at_true_poses_reference(setup, *simulated, *truth, settings.warmup);
+    if (!at_true_poses.is_null())
+      say("calibration at the true poses: segment orientation RMS " +
+          cell(at_true_poses["truth"]["segment_orientation_rms_deg"].get<double>()) + " deg");
     // The same fit with the tracker's model (calibrated unless --no-calibrate): how much of the
     // tracker's error its subject model explains, and how much its filtering adds.
     if (setup.model.marker_names() == simulated->subject.model.marker_names()) {
@@ -339,6 +348,8 @@ void run_evaluate(const EvaluateSettings& settings) {
                   {"true_subject_reference", reference ? truth_json(*reference) : json(nullptr)},
                   {"identifiable_subject_reference", simulated ? identifiable : json(nullptr)},
                   {"tracker_model_reference", model_fit ? truth_json(*model_fit) : json(nullptr)},
+                  {"constant_placement_reference", constant_placement},
+                  {"calibration_at_true_poses_reference", at_true_poses},
                   {"s2kf_smoothed", smoothed ? truth_json(*smoothed) : json(nullptr)},
                   {"error_by_time_hidden", error_by_time_hidden},
                   {"files", written},

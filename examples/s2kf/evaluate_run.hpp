@@ -17,6 +17,7 @@ struct EvaluateSettings {
   long frames = 0;
   long warmup = 20;
   bool calibrate = true;
+  bool noise_from_calibration = true;  ///< false: --uniform-noise
   bool quiet = false;
   std::string motion;              ///< simulate this motion instead of reading a recording
   std::uint64_t subject_seed = 1;  ///< the simulated subject's (and its noise's) seed

@@ -60,49 +60,108 @@ Simulated simulate_for_evaluation(const EvaluateSettings& settings) {
   return simulated;
 }
 
-/// The identifiable-subject references (identifiable_subject_reference.hpp): the true subject
-/// with the part the calibration frames' data cannot determine reset to the marker set's values,
-/// then the true-subject fit with it. The thresholds are CalibrationOptions::prior_only_fraction's
-/// (a direction's information against a marker coordinate's seen in every calibration frame):
-/// 1e-5, the exact gauges (they lie below 2e-6, the first direction the data do see above 4e-5,
-/// on a subject without soft tissue); 0.03, a looser one, which leaves the weakly seen directions
-/// to the prior too; and "nominal", every direction reset: the nominal model itself, what
-/// calibrating can improve on. The frames and priors are the default calibration's; empty when
-/// the recording's marker set is not the model's.
-json identifiable_references(const track::Session& setup, const Simulated& simulated,
-                             const io::MotionTable& truth, long warmup) {
+namespace {
+
+/// What the default calibration works with on a simulated recording: its options (the marker
+/// weights of the set), the frames it adjusts and the model it starts from.
+struct DefaultCalibration {
+  track::CalibrationOptions options;
+  std::vector<long> frames;
+  body::BodyModel nominal;
+};
+
+DefaultCalibration default_calibration(const track::Session& setup, const Simulated& simulated) {
   const track::SessionOptions defaults;
-  track::CalibrationOptions calibration = defaults.calibration;
-  calibration.marker_weight = track::calibration_weights(setup.marker_set, setup.tracker.marker_noise_mm);
-  const std::vector<long> frames = track::calibration_frame_indices(
+  DefaultCalibration c;
+  c.options = defaults.calibration;
+  c.options.marker_weight = track::calibration_weights(setup.marker_set, setup.tracker.marker_noise_mm);
+  c.frames = track::calibration_frame_indices(
       track::calibration_stretches(simulated.recording.frames(), defaults.calibration_frames,
                                    defaults.calibration_windows),
-      calibration);
+      c.options);
   // The model the calibration starts from (prepare_session's, before the calibration).
-  const body::BodyModel nominal =
-      body::apply_marker_set(body::mmm_body_model(setup.marker_set.reference_height_mm), setup.marker_set)
-          .scaled(setup.height_mm);
+  c.nominal = body::apply_marker_set(body::mmm_body_model(setup.marker_set.reference_height_mm), setup.marker_set)
+                  .scaled(setup.height_mm);
+  return c;
+}
+
+/// The true-subject fit with `model` in place of the subject's, against the truth.
+track::TruthComparison fit_with(const body::BodyModel& model, const track::Session& setup,
+                                const Simulated& simulated, const io::MotionTable& truth, long warmup) {
+  sim::Subject subject = simulated.subject;
+  subject.model = model;
+  return track::compare_with_truth(setup.model, track::true_subject_fit(subject, simulated.recording), truth,
+                                   warmup);
+}
+
+bool same_markers(const track::Session& setup, const Simulated& simulated) {
+  return setup.model.marker_names() == simulated.subject.model.marker_names() &&
+         setup.model.joint_names() == simulated.subject.model.joint_names();
+}
+
+json identifiable_json(const track::IdentifiableSubject& identifiable, double fraction,
+                       const track::TruthComparison& fit) {
+  return {{"prior_only_fraction", std::isinf(fraction) ? json("nominal") : json(fraction)},
+          {"information_ratio_threshold", number_or_null(identifiable.threshold)},
+          {"reset_directions", identifiable.reset_directions},
+          {"subject_unknowns", identifiable.information_ratios.size()},
+          {"frames_used", identifiable.frames_used},
+          {"truth", truth_json(fit)}};
+}
+
+}  // namespace
+
+json identifiable_references(const track::Session& setup, const Simulated& simulated,
+                             const io::MotionTable& truth, long warmup) {
+  if (!same_markers(setup, simulated)) return json::array();  // no common unknowns to compare
+  const DefaultCalibration c = default_calibration(setup, simulated);
   json references = json::array();
   for (const double fraction : {1e-5, 0.03, std::numeric_limits<double>::infinity()}) {
     track::IdentifiableSubject identifiable;
     try {
-      identifiable = track::identifiable_subject(nominal, simulated.subject, simulated.recording, frames,
-                                                 calibration, setup.tracker.marker_noise_mm, fraction);
+      identifiable = track::identifiable_subject(c.nominal, simulated.subject, simulated.recording, c.frames,
+                                                 c.options, setup.tracker.marker_noise_mm, fraction);
     } catch (const std::invalid_argument&) {
-      return json::array();  // another marker set: no common unknowns to compare
+      return json::array();  // no calibration frame to form the information from
     }
-    sim::Subject subject = simulated.subject;
-    subject.model = identifiable.model;
-    const track::TruthComparison fit = track::compare_with_truth(
-        setup.model, track::true_subject_fit(subject, simulated.recording), truth, warmup);
-    references.push_back({{"prior_only_fraction", std::isinf(fraction) ? json("nominal") : json(fraction)},
-                          {"information_ratio_threshold", number_or_null(identifiable.threshold)},
-                          {"reset_directions", identifiable.reset_directions},
-                          {"subject_unknowns", identifiable.information_ratios.size()},
-                          {"frames_used", identifiable.frames_used},
-                          {"truth", truth_json(fit)}});
+    references.push_back(
+        identifiable_json(identifiable, fraction, fit_with(identifiable.model, setup, simulated, truth, warmup)));
   }
   return references;
+}
+
+json constant_placement_reference(const track::Session& setup, const Simulated& simulated,
+                                  const io::MotionTable& truth, long warmup) {
+  const sim::Subject constant = track::best_constant_placement(simulated.subject, simulated.recording);
+  json reference = {{"truth", truth_json(fit_with(constant.model, setup, simulated, truth, warmup))},
+                    {"identifiable", nullptr}};
+  if (same_markers(setup, simulated)) {
+    const DefaultCalibration c = default_calibration(setup, simulated);
+    constexpr double kExactGauges = 1e-5;
+    const track::IdentifiableSubject identifiable = track::identifiable_subject(
+        c.nominal, constant, simulated.recording, c.frames, c.options, setup.tracker.marker_noise_mm, kExactGauges);
+    reference["identifiable"] = identifiable_json(identifiable, kExactGauges,
+                                                  fit_with(identifiable.model, setup, simulated, truth, warmup));
+  }
+  return reference;
+}
+
+json calibration_at_true_poses_reference(const track::Session& setup, const Simulated& simulated,
+                                         const io::MotionTable& truth, long warmup) {
+  if (!same_markers(setup, simulated)) return nullptr;
+  const DefaultCalibration c = default_calibration(setup, simulated);
+  std::vector<std::pair<long, body::Pose>> poses;
+  for (long k : c.frames) poses.emplace_back(k, simulated.recording.truth[static_cast<std::size_t>(k)]);
+  track::MarkerMapping mapping;
+  for (int m = 0; m < c.nominal.marker_count(); ++m) mapping.point_of_marker.push_back(m);
+  const track::SubjectCalibration adjusted =
+      track::adjust_subject_at_poses(c.nominal, mapping, setup.tracker, simulated.recording, poses, c.options);
+  const track::CalibrationPass& pass = adjusted.passes.front();
+  return {{"frames_used", pass.frames_used},
+          {"bundle_iterations", pass.bundle_iterations},
+          {"bundle_rms_before_mm", pass.rms_before_mm},
+          {"bundle_rms_after_mm", pass.rms_after_mm},
+          {"truth", truth_json(fit_with(adjusted.model, setup, simulated, truth, warmup))}};
 }
 
 }  // namespace s2kf::cli

@@ -36,4 +36,19 @@ Simulated simulate_for_evaluation(const EvaluateSettings& settings);
 nlohmann::json identifiable_references(const track::Session& setup, const Simulated& simulated,
                                        const io::MotionTable& truth, long warmup);
 
+/// The best constant placement (best_constant_placement: each marker where the recording shows it
+/// on average in its segment's frame at the true poses, the subject's true bone lengths), fitted
+/// frame by frame like the true-subject fit: what a constant subject gives once every pose is
+/// known, soft tissue's average included in the placement. "identifiable": the same with its
+/// exact gauges (threshold 1e-5) reset to the marker set's, the most a calibration could recover
+/// of it; null when the recording's marker set is not the model's.
+nlohmann::json constant_placement_reference(const track::Session& setup, const Simulated& simulated,
+                                            const io::MotionTable& truth, long warmup);
+
+/// The default calibration's bundle adjustment on its own frames, started at their true poses
+/// (adjust_subject_at_poses) instead of the tracker's, then the per-frame fit with that subject:
+/// where the calibration's objective itself lands. Null when the marker set is not the model's.
+nlohmann::json calibration_at_true_poses_reference(const track::Session& setup, const Simulated& simulated,
+                                                   const io::MotionTable& truth, long warmup);
+
 }  // namespace s2kf::cli

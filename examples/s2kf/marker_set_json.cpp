@@ -2,6 +2,7 @@
 #include "marker_set_json.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -233,7 +234,7 @@ std::vector<std::string> marker_set_messages(const MarkerSetChoice& choice,
 
 body::MarkerSet subject_marker_set(const body::MarkerSet& original, const body::BodyModel& calibrated,
                                    const std::map<std::string, double>& segment_scale,
-                                   const std::string& name) {
+                                   const std::vector<double>& marker_noise_mm, const std::string& name) {
   body::MarkerSet set;
   set.name = name;
   set.description = "subject calibrated by s2kf calibrate from the marker set " + original.name;
@@ -255,6 +256,7 @@ body::MarkerSet subject_marker_set(const body::MarkerSet& original, const body::
     entry.like.reset();
     entry.frame = body::marker_set_frame_name(calibrated, marker.frame);
     entry.offset = marker.offset * to_reference;
+    if (m < marker_noise_mm.size() && std::isfinite(marker_noise_mm[m])) entry.noise_mm = marker_noise_mm[m];
     set.entries.push_back(entry);
   }
   return set;

@@ -65,9 +65,10 @@ std::vector<std::string> marker_set_messages(const MarkerSetChoice& choice,
                                              const track::MarkerMapping& mapping);
 
 /// A calibrated subject as a marker set: explicit frames and offsets at the reference height
-/// (1000 mm), the subject's height and the bone-length factors relative to the scaled model.
+/// (1000 mm), the subject's height and the bone-length factors relative to the scaled model, and
+/// each marker's noise_mm where `marker_noise_mm` (per model marker, may be empty) has a finite one.
 body::MarkerSet subject_marker_set(const body::MarkerSet& original, const body::BodyModel& calibrated,
                                    const std::map<std::string, double>& segment_scale,
-                                   const std::string& name);
+                                   const std::vector<double>& marker_noise_mm, const std::string& name);
 
 }  // namespace s2kf::cli

@@ -124,6 +124,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   session_options.calibrate = settings.calibrate && settings.subject.empty();
   session_options.calibration_frames = settings.calibration_frames;
   session_options.calibration.weak_direction_shrink = settings.calibration_shrink;
+  session_options.noise_from_calibration = settings.noise_from_calibration;
   session_options.calibration.threads = settings.calibration_threads;
   const SampleSet samples = cached_sample_set(46, session_options.tracker.samples);
   if (session_options.calibrate && settings.calibration_samples > 0 &&

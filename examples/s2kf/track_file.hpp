@@ -28,6 +28,7 @@ struct TrackSettings {
   bool calibrate = true;  // calibrate the subject on the recording first (not with --subject)
   int calibration_frames = 1200;
   double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
+  bool noise_from_calibration = true;  // false: --uniform-noise
   int calibration_samples = 0;  // the calibration's tracking pass; 0: the tracker's samples
   int calibration_threads = 1;  // set by run_track: every core for one recording, 1 in a batch
   bool smooth = false;

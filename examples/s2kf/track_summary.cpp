@@ -41,7 +41,15 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
         {"segment_scale", session.calibration->segment_scale},
         {"bundle_frames", session.calibration->passes.front().frames_used},
         {"bundle_iterations", session.calibration->passes.front().bundle_iterations},
-        {"weak_direction_shrink", calibration_shrink}};
+        {"weak_direction_shrink", calibration_shrink},
+        {"marker_noise_mm", [&] {
+           // Each marker's noise where it differs from the common one (noise from the calibration).
+           nlohmann::json noise = nlohmann::json::object();
+           const std::vector<double>& sd = session.tracker.marker_noise_mm_per_marker;
+           for (std::size_t m = 0; m < sd.size() && m < session.model.markers.size(); ++m)
+             if (std::isfinite(sd[m])) noise[session.model.markers[m].name] = sd[m];
+           return noise;
+         }()}};
   std::vector<double> latency_ms = run.seconds;
   for (double& s : latency_ms) s *= 1000;
   // Per marker the tracker left out at least once: how often, and why (MarkerRejection).

@@ -38,6 +38,21 @@ TEST(CalibrateCommand, WritesASubjectFileThatLoads) {
   const body::BodyModel model =
       body::apply_marker_set(body::mmm_body_model(1000), set).scaled(*set.height_mm);
   EXPECT_EQ(model.marker_count(), 41);
+  // Each marker the calibration saw carries its noise, from its residual: 5 to 20 mm.
+  int with_noise = 0;
+  for (const body::MarkerSetEntry& entry : set.entries)
+    if (entry.noise_mm) {
+      ++with_noise;
+      EXPECT_GE(*entry.noise_mm, 5.0) << entry.label;
+      EXPECT_LE(*entry.noise_mm, 20.0) << entry.label;
+    }
+  EXPECT_GE(with_noise, 30);
+  const std::string uniform = (dir / "uniform.json").string();
+  const auto [uniform_status, uniform_output] = test_support::run_command(
+      "calibrate " + recording + " --frames 150 --quiet --uniform-noise --out " + uniform);
+  ASSERT_EQ(uniform_status, 0) << uniform_output;
+  for (const body::MarkerSetEntry& entry : cli::load_marker_set(uniform).entries)
+    EXPECT_FALSE(entry.noise_mm.has_value()) << entry.label;
   // And the CLI takes it back as --markerset.
   const auto [again, again_output] =
       test_support::run_command("calibrate " + recording + " --frames 150 --iterations 1 --markerset " +

@@ -200,17 +200,29 @@ TEST(TrackCommand, CalibratesByDefaultAndLowersTheMarkerDistance) {
             0.8 * number_after("mean_marker_distance_before_mm"));
   EXPECT_EQ(number_after("weak_direction_shrink"), 0.03);  // the default, recorded
   EXPECT_EQ(nlohmann::json::parse(summary)["calibration"]["samples"].get<int>(), 301);  // the tracker's
+  // Each calibrated marker's noise follows its residual: 0.5 to 2 times the common 10 mm, not all alike.
+  const nlohmann::json noise = nlohmann::json::parse(summary)["calibration"]["marker_noise_mm"];
+  EXPECT_GE(noise.size(), 30u) << noise.dump();
+  double smallest = 1e9, largest = 0;
+  for (const auto& [name, sd] : noise.items()) {
+    smallest = std::min(smallest, sd.get<double>());
+    largest = std::max(largest, sd.get<double>());
+  }
+  EXPECT_GE(smallest, 5.0);
+  EXPECT_LE(largest, 20.0);
+  EXPECT_GT(largest, 1.2 * smallest);
   // --calibration-shrink 0 estimates every direction the data see freely: another subject, here
   // also with a calibration pass of its own sample count.
   const fs::path free = scratch("calibrated") / "free";
   const CommandResult unshrunk = run_command("track " + data_file("handstand.c3d") +
                                              " --calibration-frames 300 --calibration-shrink 0 "
-                                             "--calibration-samples 93 --formats csv --out " +
+                                             "--calibration-samples 93 --uniform-noise --formats csv --out " +
                                              free.string());
   ASSERT_EQ(unshrunk.status, 0) << unshrunk.output;
   const auto free_summary = nlohmann::json::parse(read_text(free.string() + ".json"));
   EXPECT_EQ(free_summary["calibration"]["weak_direction_shrink"].get<double>(), 0.0);
   EXPECT_EQ(free_summary["calibration"]["samples"].get<int>(), 93);
+  EXPECT_TRUE(free_summary["calibration"]["marker_noise_mm"].empty());  // --uniform-noise
   EXPECT_NE(free_summary["calibration"]["segment_scale"].dump(),
             nlohmann::json::parse(summary)["calibration"]["segment_scale"].dump());
 }

@@ -95,7 +95,7 @@ TEST(MarkerSet, JointLimitsReplaceTheModelsRange) {
   EXPECT_NE(base.joints[base.joint_index("LKx")].lower, -2.6);  // the model's own range differs
   const body::MarkerSet again = cli::marker_set_from_json(cli::marker_set_to_json(set), "again");
   EXPECT_EQ(again.joint_limits, set.joint_limits);
-  const body::MarkerSet subject = cli::subject_marker_set(set, model.scaled(1750), {}, "subject");
+  const body::MarkerSet subject = cli::subject_marker_set(set, model.scaled(1750), {}, {}, "subject");
   EXPECT_EQ(subject.joint_limits, set.joint_limits);
   EXPECT_EQ(body::apply_marker_set(base, subject).joints[base.joint_index("LKx")].lower, -2.6);
 }

@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 #include "address_sanitizer.hpp"
@@ -257,6 +259,14 @@ TEST(Session, CalibrationTracksWithItsOwnSampleSet) {
   ASSERT_TRUE(small.calibration.has_value());
   EXPECT_EQ(own.calibration_sample_count, samples.count());
   EXPECT_EQ(small.calibration_sample_count, 93);
+  // The tracker's per-marker noise follows the calibration's residuals (noise_from_calibration).
+  const std::vector<double>& residual = own.calibration->marker_residual_rms_mm;
+  ASSERT_EQ(residual.size(), static_cast<std::size_t>(own.model.marker_count()));
+  EXPECT_EQ(own.tracker.marker_noise_mm_per_marker,
+            track::marker_noise_from_residuals(residual, own.tracker.marker_noise_mm, {}));
+  int finite = 0;
+  for (double r : residual) finite += std::isfinite(r) ? 1 : 0;
+  EXPECT_EQ(finite, own.mapping.markers_used());
   // Another pass, so another start for the bundle adjustment: the subject moves a little...
   double largest_change = 0;
   for (int m = 0; m < own.model.marker_count(); ++m)
@@ -283,6 +293,29 @@ TEST(Session, CalibrationTracksWithItsOwnSampleSet) {
               std::string::npos)
         << e.what();
   }
+}
+
+// Each marker's noise: the common noise times its residual over the median residual, within 0.5-2
+// times; a marker with its own noise keeps it, one without a residual gets NaN (the common noise).
+TEST(Session, MarkerNoiseFollowsTheCalibrationResiduals) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // Median of the finite residuals {1, 2, 4, 8, 16} is 4.
+  const std::vector<double> residual{2, 4, 8, nan, 16, 1};
+  const std::vector<double> noise = track::marker_noise_from_residuals(residual, 10.0, {});
+  ASSERT_EQ(noise.size(), residual.size());
+  EXPECT_DOUBLE_EQ(noise[0], 5.0);
+  EXPECT_DOUBLE_EQ(noise[1], 10.0);
+  EXPECT_DOUBLE_EQ(noise[2], 20.0);
+  EXPECT_TRUE(std::isnan(noise[3]));
+  EXPECT_DOUBLE_EQ(noise[4], 20.0);  // 4 times the median, clamped to 2
+  EXPECT_DOUBLE_EQ(noise[5], 5.0);   // a quarter, clamped to a half
+  const std::vector<double> own{nan, 3.0, nan, 7.0};
+  const std::vector<double> kept = track::marker_noise_from_residuals(residual, 10.0, own);
+  EXPECT_DOUBLE_EQ(kept[1], 3.0);
+  EXPECT_DOUBLE_EQ(kept[3], 7.0);  // its own noise, though it had no residual
+  EXPECT_DOUBLE_EQ(kept[2], 20.0);
+  // No residual at all: the set's own noise, unchanged.
+  EXPECT_EQ(track::marker_noise_from_residuals({nan, nan}, 10.0, {}), std::vector<double>{});
 }
 
 // Calibration reads the whole of a short recording, and spread stretches of a long one.

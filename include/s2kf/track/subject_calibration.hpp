@@ -10,6 +10,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/track/marker_mapping.hpp>
@@ -29,6 +30,7 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 #include <string>
 #include <thread>
 #include <utility>
@@ -155,6 +157,10 @@ struct SubjectCalibration {
   /// The final pass; NaN without one (the caller's own tracking with the calibrated model gives it:
   /// the tracker is causal, so its first frames are that pass).
   double mean_marker_distance_after_mm = std::numeric_limits<double>::quiet_NaN();
+  /// Per model marker: RMS distance (mm) between the marker and the calibrated model at the
+  /// adjusted poses of the last bundle adjustment (its inlier residuals); NaN for a marker the
+  /// adjustment did not see.
+  std::vector<double> marker_residual_rms_mm;
 };
 
 // The bundle adjustment behind calibrate_subject, compiled with it (compilation_mode.hpp).
@@ -212,6 +218,30 @@ struct BundleFrame {
   Eigen::VectorXd joints;
   std::vector<int> markers;
 };
+
+/// RMS distance (mm) per model marker between the recording and `model` at the frames' poses,
+/// over each frame's listed markers (indices into `used`); NaN for a marker no frame lists.
+inline std::vector<double> marker_residual_rms(const body::BodyModel& model, const MarkerMapping& mapping,
+                                               const MarkerSequence& recording, const std::vector<int>& used,
+                                               const std::vector<BundleFrame>& frames) {
+  std::vector<double> sum(static_cast<std::size_t>(model.marker_count()), 0.0);
+  std::vector<long> count(sum.size(), 0);
+  for (const BundleFrame& frame : frames) {
+    const Eigen::Matrix3Xd predicted =
+        body::marker_positions(model, body::joint_frames(model, frame.position, frame.rotation, frame.joints));
+    const auto points = recording.frame(frame.index);
+    for (int u : frame.markers) {
+      const int m = used[static_cast<std::size_t>(u)];
+      const int point = mapping.point_of_marker[static_cast<std::size_t>(m)];
+      sum[static_cast<std::size_t>(m)] += (points.col(point) - predicted.col(m)).squaredNorm();
+      ++count[static_cast<std::size_t>(m)];
+    }
+  }
+  std::vector<double> rms(sum.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t m = 0; m < sum.size(); ++m)
+    if (count[m] > 0) rms[m] = std::sqrt(sum[m] / static_cast<double>(count[m]));
+  return rms;
+}
 
 /// Tracks all frames; returns the poses of the frames usable for calibration and the pass's mean
 /// marker distance after convergence. The stretches (split at options.restart_frames) are
@@ -782,6 +812,18 @@ SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerM
                                      const TrackerOptions& tracker_options, const MarkerSequence& recording,
                                      const SampleSet& samples, const CalibrationOptions& options = {});
 
+/// The calibration's bundle adjustment alone, started at given poses instead of a tracking pass's:
+/// adjusts `model` (its bone-length factors and marker offsets, with the priors of `options`)
+/// together with the poses on the frames `poses` names, each with every visible mapped marker
+/// (no outliers are left out). With the true poses of a simulated recording it shows what the
+/// calibration's objective reaches apart from the poses the tracker gives it. The result has the
+/// adjusted model, its length factors and one pass; frames with fewer than 3 markers are skipped.
+SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model, const MarkerMapping& mapping,
+                                           const TrackerOptions& tracker_options,
+                                           const MarkerSequence& recording,
+                                           const std::vector<std::pair<long, body::Pose>>& poses,
+                                           const CalibrationOptions& options = {});
+
 #if S2KF_DEFINE_HEAVY
 S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerMapping& mapping,
                                                  const TrackerOptions& tracker_options,
@@ -853,11 +895,53 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
     pass.frames_used = static_cast<long>(kept.size());
     adjustment.adjust(result.model, kept, pass);
     result.passes.push_back(pass);
+    result.marker_residual_rms_mm = detail::marker_residual_rms(result.model, mapping, recording, used, kept);
   }
   for (std::size_t s = 0; s < adjustment.segments().size(); ++s)
     result.segment_scale[adjustment.segments()[s]] = adjustment.cumulative()[s];
   result.mean_marker_distance_before_mm = result.passes.front().mean_marker_distance_mm;
   if (options.final_pass) result.mean_marker_distance_after_mm = result.passes.back().mean_marker_distance_mm;
+  return result;
+}
+
+S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model, const MarkerMapping& mapping,
+                                                       const TrackerOptions& tracker_options,
+                                                       const MarkerSequence& recording,
+                                                       const std::vector<std::pair<long, body::Pose>>& poses,
+                                                       const CalibrationOptions& options) {
+  options.validate();
+  model.validate();
+  if (mapping.point_of_marker.size() != static_cast<std::size_t>(model.marker_count()))
+    throw std::invalid_argument("calibration: the marker mapping does not fit the body model");
+  detail::BundleAdjustment adjustment(model, mapping, recording, options,
+                                      tracker_options.marker_noise_mm * tracker_options.marker_noise_mm);
+  const std::vector<int>& used = adjustment.used();
+  std::vector<detail::BundleFrame> frames;
+  for (const auto& [index, pose] : poses) {
+    if (index < 0 || index >= recording.frame_count())
+      throw std::invalid_argument("calibration: a posed frame lies outside the recording");
+    if (pose.joints.size() != model.joint_count())
+      throw std::invalid_argument("calibration: a pose has another joint count than the model");
+    detail::BundleFrame frame{index, pose.root_position, pose.root_rotation(), pose.joints, {}};
+    const auto points = recording.frame(index);
+    for (std::size_t u = 0; u < used.size(); ++u) {
+      const int point = mapping.point_of_marker[static_cast<std::size_t>(used[u])];
+      if (point < points.cols() && recording.visible(point, index) && points.col(point).allFinite())
+        frame.markers.push_back(static_cast<int>(u));
+    }
+    if (frame.markers.size() >= 3) frames.push_back(std::move(frame));
+  }
+  if (frames.empty()) throw std::invalid_argument("calibration: no posed frame shows 3 or more markers");
+  SubjectCalibration result;
+  result.model = model;
+  CalibrationPass pass;
+  pass.frames_used = static_cast<long>(frames.size());
+  adjustment.adjust(result.model, frames, pass);
+  result.passes.push_back(pass);
+  result.marker_residual_rms_mm = detail::marker_residual_rms(result.model, mapping, recording, used, frames);
+  for (std::size_t s = 0; s < adjustment.segments().size(); ++s)
+    result.segment_scale[adjustment.segments()[s]] = adjustment.cumulative()[s];
+  result.mean_marker_distance_before_mm = std::numeric_limits<double>::quiet_NaN();
   return result;
 }
 #endif

@@ -24,6 +24,12 @@ namespace s2kf::track {
 /// without any visible marker has no fit: NaN row (compare_with_truth skips it).
 io::MotionTable true_subject_fit(const sim::Subject& subject, const sim::Recording& recording);
 
+/// `subject` with each marker's offset replaced by the mean of where the recording shows it in the
+/// frame it rides on, at the true poses: the constant marker placement that fits the recording
+/// best (least squares) once every pose is known. Soft tissue's average over the recording is
+/// then part of the placement, as it is for any calibration from the recording's markers.
+sim::Subject best_constant_placement(const sim::Subject& subject, const sim::Recording& recording);
+
 // The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
 #if S2KF_DEFINE_HEAVY
 
@@ -49,6 +55,29 @@ S2KF_INLINE io::MotionTable true_subject_fit(const sim::Subject& subject, const 
       table.values.row(k).setConstant(std::numeric_limits<double>::quiet_NaN());
   }
   return table;
+}
+
+S2KF_INLINE sim::Subject best_constant_placement(const sim::Subject& subject, const sim::Recording& recording) {
+  if (recording.labels != subject.marker_names ||
+      recording.truth.size() != static_cast<std::size_t>(recording.frames()))
+    throw std::invalid_argument("best_constant_placement: the recording was not simulated on this subject");
+  const body::BodyModel& model = subject.model;
+  Eigen::Matrix3Xd sum = Eigen::Matrix3Xd::Zero(3, model.marker_count());
+  Eigen::VectorXd count = Eigen::VectorXd::Zero(model.marker_count());
+  for (Eigen::Index k = 0; k < recording.frames(); ++k) {
+    const body::FrameTransforms tf = body::joint_frames(model, recording.truth[static_cast<std::size_t>(k)]);
+    const auto y = recording.frame(k);
+    for (int m = 0; m < model.marker_count(); ++m) {
+      if (!recording.visible(m, k) || !y.col(m).allFinite()) continue;
+      const auto f = static_cast<std::size_t>(model.markers[static_cast<std::size_t>(m)].frame);
+      sum.col(m) += tf.rotations[f].transpose() * (y.col(m) - tf.origins[f]);
+      count[m] += 1;
+    }
+  }
+  sim::Subject fitted = subject;
+  for (int m = 0; m < model.marker_count(); ++m)
+    if (count[m] > 0) fitted.model.markers[static_cast<std::size_t>(m)].offset = sum.col(m) / count[m];
+  return fitted;
 }
 
 #endif  // S2KF_DEFINE_HEAVY
