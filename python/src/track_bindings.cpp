@@ -292,7 +292,7 @@ void bind_track(py::module_& module) {
       "track",
       [](const py::object& recording, const py::object& labels, const py::object& rate,
          const py::object& markerset, const py::object& subject, bool calibrate,
-         std::int64_t calibration_frames, double calibration_shrink, bool smooth, int samples,
+         std::int64_t calibration_frames, double calibration_shrink, bool uniform_noise, bool smooth, int samples,
          double height_mm, const std::string& preset, const std::string& method,
          const py::object& model_output, const py::object& name) {
         TrackSettings settings;
@@ -301,6 +301,7 @@ void bind_track(py::module_& module) {
         settings.calibrate = calibrate;
         settings.calibration_frames = calibration_frames;
         settings.calibration_shrink = calibration_shrink;
+        settings.uniform_noise = uniform_noise;
         settings.smooth = smooth;
         settings.samples = samples;
         settings.height_mm = height_mm;
@@ -312,14 +313,15 @@ void bind_track(py::module_& module) {
       py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("calibrate") = true,
       py::arg("calibration_frames") = 1200,
       py::arg("calibration_shrink") = track::CalibrationOptions{}.weak_direction_shrink,
-      py::arg("smooth") = false, py::arg("samples") = 301, py::arg("height_mm") = 0.0,
+      py::arg("uniform_noise") = false, py::arg("smooth") = false, py::arg("samples") = 301, py::arg("height_mm") = 0.0,
       py::arg("preset") = "default", py::arg("method") = "s2kf", py::arg("model_output") = py::none(),
       py::arg("name") = py::none(),
       "Tracks a whole recording as `s2kf track` does: track('walk.c3d'), track(s2kf.read_c3d(...)), or "
       "track(points, labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
       "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "
       "calibrate: fit the subject's offsets and bone lengths on the first calibration_frames frames; "
-      "calibration_shrink: C, a weakly seen offset direction keeps mu / (mu + C) of the data's step; smooth: "
+      "calibration_shrink: C, a weakly seen offset direction keeps mu / (mu + C) of the data's step; "
+      "uniform_noise: every marker the same noise (else each its calibration residual's); smooth: "
       "RTS smoothing; height_mm: 0 estimates it; model_output: (P,) bool, points that are not markers. "
       "Runs without the GIL. Returns a TrackResult.");
 }

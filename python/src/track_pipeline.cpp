@@ -43,6 +43,7 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   session_options.calibrate = settings.calibrate && settings.subject.empty();
   session_options.calibration_frames = settings.calibration_frames;
   session_options.calibration.weak_direction_shrink = settings.calibration_shrink;
+  session_options.noise_from_calibration = !settings.uniform_noise;
 
   auto result = std::make_unique<TrackResult>();
   result->name = name;

@@ -24,6 +24,7 @@ struct TrackSettings {
   bool calibrate = true;
   std::int64_t calibration_frames = 1200;
   double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
+  bool uniform_noise = false;  // true: every marker the tracker's noise (else from the calibration)
   bool smooth = false;
   int samples = 301;
   double height_mm = 0;

@@ -57,6 +57,18 @@ def test_calibration_shrink_as_the_program_takes_it(cli, tmp_path, data_dir):
     assert shrunk.summary["calibration"]["segment_scale"] != result.summary["calibration"]["segment_scale"]
 
 
+def test_uniform_noise_as_the_program_takes_it(cli, tmp_path, data_dir):
+    """Each marker's noise follows its calibration residual unless uniform_noise is set."""
+    path = str(data_dir / "handstand.c3d")
+    uniform = s2kf.track(path, calibration_frames=300, uniform_noise=True)
+    same_as_program(cli, tmp_path, uniform, [path, "--calibration-frames", "300", "--uniform-noise"])
+    assert uniform.summary["calibration"]["marker_noise_mm"] == {}
+    default = s2kf.track(path, calibration_frames=300)
+    noise = default.summary["calibration"]["marker_noise_mm"]
+    assert len(noise) >= 30 and all(5.0 <= sd <= 20.0 for sd in noise.values())
+    assert not np.array_equal(default.poses, uniform.poses)
+
+
 def test_points_in_memory_give_the_files_of_the_program(cli, tmp_path, data_dir):
     """Arrays, not a file: the same motion (only the summary's input name differs)."""
     labels, rate, points = s2kf.read_c3d(str(data_dir / "walk.c3d"))
