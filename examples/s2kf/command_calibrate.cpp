@@ -78,9 +78,8 @@ void run_calibrate(const CalibrateSettings& settings) {
   const std::vector<std::string> messages = marker_set_messages(choice, session.mapping);
 
   const std::string name = fs::path(settings.out).stem().string();
-  const body::MarkerSet subject =
-      subject_marker_set(choice.set, calibration.model, calibration.segment_scale,
-                         session.tracker.marker_noise_mm_per_marker, name);
+  const body::MarkerSet subject = subject_marker_set(choice.set, calibration.model, calibration.segment_scale,
+                                                     session.tracker.marker_noise_mm_per_marker, name);
   nlohmann::json document = marker_set_to_json(subject);
   nlohmann::json passes = nlohmann::json::array();
   for (const track::CalibrationPass& pass : calibration.passes)

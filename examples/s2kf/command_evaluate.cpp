@@ -34,9 +34,10 @@ const RegisterCommand evaluate_registration{
       app.add_flag(
           "!--no-calibrate", settings->calibrate,
           "evaluate with the marker set as it is (default: calibrate the subject first, as s2kf track does)");
-      app.add_flag("!--uniform-noise", settings->noise_from_calibration,
-                   "give every marker the same noise (default: after calibrating, each marker's noise follows its "
-                   "calibration residual, 0.5-2 times the common 10 mm)");
+      app.add_flag(
+          "!--uniform-noise", settings->noise_from_calibration,
+          "give every marker the same noise (default: after calibrating, each marker's noise follows its "
+          "calibration residual, 0.5-2 times the common 10 mm)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
       app.add_option("--motion", settings->motion,
                      "simulate this bundled motion (or motion .json) on a realistic subject instead of "

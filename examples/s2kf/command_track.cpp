@@ -110,9 +110,10 @@ const RegisterCommand track_registration{
                      "pull the marker offsets the recording sees only weakly towards the marker set: "
                      "a direction keeps mu / (mu + C) of the data's step (default 0.03; 0: none)")
           ->check(CLI::Range(0.0, 1e6));
-      app.add_flag("!--uniform-noise", settings->noise_from_calibration,
-                   "give every marker the same noise (default: after calibrating, each marker's noise follows its "
-                   "calibration residual, 0.5-2 times the common 10 mm)");
+      app.add_flag(
+          "!--uniform-noise", settings->noise_from_calibration,
+          "give every marker the same noise (default: after calibrating, each marker's noise follows its "
+          "calibration residual, 0.5-2 times the common 10 mm)");
       app.add_flag(
           "--smooth", settings->smooth,
           "offline Rauch-Tung-Striebel smoothing of the S2KF's motion (about 17 KB per frame in memory)");

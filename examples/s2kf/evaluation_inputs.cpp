@@ -80,8 +80,9 @@ DefaultCalibration default_calibration(const track::Session& setup, const Simula
                                    defaults.calibration_windows),
       c.options);
   // The model the calibration starts from (prepare_session's, before the calibration).
-  c.nominal = body::apply_marker_set(body::mmm_body_model(setup.marker_set.reference_height_mm), setup.marker_set)
-                  .scaled(setup.height_mm);
+  c.nominal =
+      body::apply_marker_set(body::mmm_body_model(setup.marker_set.reference_height_mm), setup.marker_set)
+          .scaled(setup.height_mm);
   return c;
 }
 
@@ -124,8 +125,8 @@ json identifiable_references(const track::Session& setup, const Simulated& simul
     } catch (const std::invalid_argument&) {
       return json::array();  // no calibration frame to form the information from
     }
-    references.push_back(
-        identifiable_json(identifiable, fraction, fit_with(identifiable.model, setup, simulated, truth, warmup)));
+    references.push_back(identifiable_json(identifiable, fraction,
+                                           fit_with(identifiable.model, setup, simulated, truth, warmup)));
   }
   return references;
 }
@@ -138,10 +139,11 @@ json constant_placement_reference(const track::Session& setup, const Simulated& 
   if (same_markers(setup, simulated)) {
     const DefaultCalibration c = default_calibration(setup, simulated);
     constexpr double kExactGauges = 1e-5;
-    const track::IdentifiableSubject identifiable = track::identifiable_subject(
-        c.nominal, constant, simulated.recording, c.frames, c.options, setup.tracker.marker_noise_mm, kExactGauges);
-    reference["identifiable"] = identifiable_json(identifiable, kExactGauges,
-                                                  fit_with(identifiable.model, setup, simulated, truth, warmup));
+    const track::IdentifiableSubject identifiable =
+        track::identifiable_subject(c.nominal, constant, simulated.recording, c.frames, c.options,
+                                    setup.tracker.marker_noise_mm, kExactGauges);
+    reference["identifiable"] = identifiable_json(
+        identifiable, kExactGauges, fit_with(identifiable.model, setup, simulated, truth, warmup));
   }
   return reference;
 }
@@ -154,8 +156,8 @@ json calibration_at_true_poses_reference(const track::Session& setup, const Simu
   for (long k : c.frames) poses.emplace_back(k, simulated.recording.truth[static_cast<std::size_t>(k)]);
   track::MarkerMapping mapping;
   for (int m = 0; m < c.nominal.marker_count(); ++m) mapping.point_of_marker.push_back(m);
-  const track::SubjectCalibration adjusted =
-      track::adjust_subject_at_poses(c.nominal, mapping, setup.tracker, simulated.recording, poses, c.options);
+  const track::SubjectCalibration adjusted = track::adjust_subject_at_poses(
+      c.nominal, mapping, setup.tracker, simulated.recording, poses, c.options);
   const track::CalibrationPass& pass = adjusted.passes.front();
   return {{"frames_used", pass.frames_used},
           {"bundle_iterations", pass.bundle_iterations},

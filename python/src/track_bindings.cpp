@@ -292,8 +292,8 @@ void bind_track(py::module_& module) {
       "track",
       [](const py::object& recording, const py::object& labels, const py::object& rate,
          const py::object& markerset, const py::object& subject, bool calibrate,
-         std::int64_t calibration_frames, double calibration_shrink, bool uniform_noise, bool smooth, int samples,
-         double height_mm, const std::string& preset, const std::string& method,
+         std::int64_t calibration_frames, double calibration_shrink, bool uniform_noise, bool smooth,
+         int samples, double height_mm, const std::string& preset, const std::string& method,
          const py::object& model_output, const py::object& name) {
         TrackSettings settings;
         settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();
@@ -313,9 +313,9 @@ void bind_track(py::module_& module) {
       py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("calibrate") = true,
       py::arg("calibration_frames") = 1200,
       py::arg("calibration_shrink") = track::CalibrationOptions{}.weak_direction_shrink,
-      py::arg("uniform_noise") = false, py::arg("smooth") = false, py::arg("samples") = 301, py::arg("height_mm") = 0.0,
-      py::arg("preset") = "default", py::arg("method") = "s2kf", py::arg("model_output") = py::none(),
-      py::arg("name") = py::none(),
+      py::arg("uniform_noise") = false, py::arg("smooth") = false, py::arg("samples") = 301,
+      py::arg("height_mm") = 0.0, py::arg("preset") = "default", py::arg("method") = "s2kf",
+      py::arg("model_output") = py::none(), py::arg("name") = py::none(),
       "Tracks a whole recording as `s2kf track` does: track('walk.c3d'), track(s2kf.read_c3d(...)), or "
       "track(points, labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
       "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "

@@ -188,8 +188,8 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
       subject.model, track::true_subject_fit(track::best_constant_placement(subject, recording), recording),
       sim::truth_motion(recording, subject.joint_names), 20);
   const nlohmann::json& placement = parsed["constant_placement_reference"];
-  EXPECT_NEAR(placement["truth"]["segment_orientation_rms_deg"].get<double>(), constant.segment_orientation_rms_deg,
-              1e-6);
+  EXPECT_NEAR(placement["truth"]["segment_orientation_rms_deg"].get<double>(),
+              constant.segment_orientation_rms_deg, 1e-6);
   EXPECT_EQ(placement["identifiable"]["prior_only_fraction"], 1e-5);
   EXPECT_GT(placement["identifiable"]["reset_directions"].get<int>(), 0);
   EXPECT_GT(placement["identifiable"]["truth"]["segment_orientation_rms_deg"].get<double>(),
@@ -198,7 +198,8 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
   // the marker set does.
   const nlohmann::json& at_true_poses = parsed["calibration_at_true_poses_reference"];
   EXPECT_GT(at_true_poses["frames_used"].get<int>(), 5);
-  EXPECT_LT(at_true_poses["bundle_rms_after_mm"].get<double>(), 0.5 * at_true_poses["bundle_rms_before_mm"].get<double>());
+  EXPECT_LT(at_true_poses["bundle_rms_after_mm"].get<double>(),
+            0.5 * at_true_poses["bundle_rms_before_mm"].get<double>());
   EXPECT_GT(at_true_poses["truth"]["segment_orientation_rms_deg"].get<double>(), 0.1);
 }
 

@@ -251,7 +251,8 @@ TEST(SubjectCalibration, AdjustsTheSubjectAtGivenPoses) {
   const body::BodyModel model = body::mmm_body_model(1750);
   const track::MarkerMapping mapping = track::map_markers(s.recording.labels, model.marker_names());
   std::vector<std::pair<long, body::Pose>> poses;
-  for (long k = 0; k < s.recording.frames(); k += 2) poses.emplace_back(k, s.recording.truth[static_cast<std::size_t>(k)]);
+  for (long k = 0; k < s.recording.frames(); k += 2)
+    poses.emplace_back(k, s.recording.truth[static_cast<std::size_t>(k)]);
   track::CalibrationOptions options;
   options.weak_direction_shrink = 0;
   const track::SubjectCalibration adjusted =
@@ -279,8 +280,9 @@ TEST(SubjectCalibration, AdjustsTheSubjectAtGivenPoses) {
                std::invalid_argument);
   std::vector<std::pair<long, body::Pose>> short_pose{{0, s.recording.truth.front()}};
   short_pose[0].second.joints.resize(3);
-  EXPECT_THROW(track::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, short_pose, options),
-               std::invalid_argument);
+  EXPECT_THROW(
+      track::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, short_pose, options),
+      std::invalid_argument);
   EXPECT_THROW(track::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, {}, options),
                std::invalid_argument);
 }

@@ -93,8 +93,10 @@ TEST(BestConstantPlacement, TakesTheMeanOfTheMarkerInItsSegmentFrame) {
   const Eigen::Vector3d d(4, -2, 6);
   const int frame = c.subject.model.markers[5].frame;
   for (Eigen::Index k = 0; k < c.recording.frames(); ++k) {
-    const body::FrameTransforms tf = body::joint_frames(c.subject.model, c.recording.truth[static_cast<std::size_t>(k)]);
-    const Eigen::Vector3d shift = tf.rotations[static_cast<std::size_t>(frame)] * (k % 2 == 0 ? d : Eigen::Vector3d(-3 * d));
+    const body::FrameTransforms tf =
+        body::joint_frames(c.subject.model, c.recording.truth[static_cast<std::size_t>(k)]);
+    const Eigen::Vector3d shift =
+        tf.rotations[static_cast<std::size_t>(frame)] * (k % 2 == 0 ? d : Eigen::Vector3d(-3 * d));
     c.recording.positions.block<3, 1>(3 * 5, k) += shift;
   }
   const sim::Subject constant = track::best_constant_placement(c.subject, c.recording);
@@ -110,8 +112,8 @@ TEST(BestConstantPlacement, FitsARealisticSubjectBetterThanItsTruePlacement) {
   const track::TruthComparison placement =
       track::compare_with_truth(c.subject.model, track::true_subject_fit(c.subject, c.recording), truth, 0);
   const track::TruthComparison constant = track::compare_with_truth(
-      c.subject.model, track::true_subject_fit(track::best_constant_placement(c.subject, c.recording), c.recording),
-      truth, 0);
+      c.subject.model,
+      track::true_subject_fit(track::best_constant_placement(c.subject, c.recording), c.recording), truth, 0);
   EXPECT_GT(constant.segment_orientation_rms_deg, 0.1);  // the soft tissue's changes remain
   EXPECT_LT(constant.segment_orientation_rms_deg, placement.segment_orientation_rms_deg);
 }

@@ -129,8 +129,8 @@ inline std::vector<double> marker_noise_of(const body::MarkerSet& set) {
 /// markers', clamped to [0.5, 2] times, so the common level stays the tracker's. A marker with its
 /// own noise in `own` (a finite entry; `own` may be empty) keeps it; one without a residual (never
 /// seen in the calibration) gets NaN, the tracker's common noise. Empty when no residual is known.
-inline std::vector<double> marker_noise_from_residuals(const std::vector<double>& residual_rms_mm, double noise_mm,
-                                                       const std::vector<double>& own) {
+inline std::vector<double> marker_noise_from_residuals(const std::vector<double>& residual_rms_mm,
+                                                       double noise_mm, const std::vector<double>& own) {
   std::vector<double> known;
   for (double r : residual_rms_mm)
     if (std::isfinite(r) && r > 0) known.push_back(r);
@@ -281,9 +281,9 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
       session.times.calibration = seconds_since(start);
       session.model = session.calibration->model;
       if (options.noise_from_calibration)
-        session.tracker.marker_noise_mm_per_marker =
-            marker_noise_from_residuals(session.calibration->marker_residual_rms_mm,
-                                        session.tracker.marker_noise_mm, session.tracker.marker_noise_mm_per_marker);
+        session.tracker.marker_noise_mm_per_marker = marker_noise_from_residuals(
+            session.calibration->marker_residual_rms_mm, session.tracker.marker_noise_mm,
+            session.tracker.marker_noise_mm_per_marker);
     } catch (const std::invalid_argument& e) {
       if (!options.calibration_may_fail)
         throw std::invalid_argument(std::string("calibration failed: ") + e.what());

@@ -30,7 +30,6 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
-#include <utility>
 #include <string>
 #include <thread>
 #include <utility>
@@ -227,8 +226,8 @@ inline std::vector<double> marker_residual_rms(const body::BodyModel& model, con
   std::vector<double> sum(static_cast<std::size_t>(model.marker_count()), 0.0);
   std::vector<long> count(sum.size(), 0);
   for (const BundleFrame& frame : frames) {
-    const Eigen::Matrix3Xd predicted =
-        body::marker_positions(model, body::joint_frames(model, frame.position, frame.rotation, frame.joints));
+    const Eigen::Matrix3Xd predicted = body::marker_positions(
+        model, body::joint_frames(model, frame.position, frame.rotation, frame.joints));
     const auto points = recording.frame(frame.index);
     for (int u : frame.markers) {
       const int m = used[static_cast<std::size_t>(u)];
@@ -904,7 +903,8 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
   return result;
 }
 
-S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model, const MarkerMapping& mapping,
+S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model,
+                                                       const MarkerMapping& mapping,
                                                        const TrackerOptions& tracker_options,
                                                        const MarkerSequence& recording,
                                                        const std::vector<std::pair<long, body::Pose>>& poses,

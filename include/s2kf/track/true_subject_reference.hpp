@@ -57,7 +57,8 @@ S2KF_INLINE io::MotionTable true_subject_fit(const sim::Subject& subject, const 
   return table;
 }
 
-S2KF_INLINE sim::Subject best_constant_placement(const sim::Subject& subject, const sim::Recording& recording) {
+S2KF_INLINE sim::Subject best_constant_placement(const sim::Subject& subject,
+                                                 const sim::Recording& recording) {
   if (recording.labels != subject.marker_names ||
       recording.truth.size() != static_cast<std::size_t>(recording.frames()))
     throw std::invalid_argument("best_constant_placement: the recording was not simulated on this subject");
