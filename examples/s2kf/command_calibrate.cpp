@@ -6,6 +6,7 @@
 #include "tracker_samples.hpp"
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/track/session.hpp>
@@ -37,6 +38,8 @@ struct CalibrateSettings {
   bool no_scales = false;
   double shrink = track::CalibrationOptions{}.weak_direction_shrink;
   bool noise_from_calibration = true;
+  bool static_pose = false;
+  double static_sd_deg = 3.0;
 };
 
 std::string fixed(double value, int precision) {
@@ -65,6 +68,7 @@ void run_calibrate(const CalibrateSettings& settings) {
   options.calibration.estimate_segment_scales = !settings.no_scales;
   options.calibration.weak_direction_shrink = settings.shrink;
   options.noise_from_calibration = settings.noise_from_calibration;
+  if (settings.static_pose) options.calibration.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
   track::Session session;
   try {
     session =
@@ -113,6 +117,7 @@ void run_calibrate(const CalibrateSettings& settings) {
       {"stretches", session.calibration_stretches},
       {"iterations", settings.iterations},
       {"weak_direction_shrink", settings.shrink},
+      {"static_pose_sd_deg", settings.static_pose ? nlohmann::json(settings.static_sd_deg) : nlohmann::json(nullptr)},
       {"segment_scale", calibration.segment_scale},
       {"passes", passes},
       {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},
@@ -154,6 +159,13 @@ const RegisterCommand calibrate_registration{
                      "pull the marker offsets the recording sees only weakly towards the marker set: "
                      "a direction keeps mu / (mu + C) of the data's step (default 0.03; 0: none)")
           ->check(CLI::Range(0.0, 1e6));
+      app.add_flag("--static", settings->static_pose,
+                   "the recording is a static trial in the model's zero pose (standing upright, arms "
+                   "hanging, every joint angle 0, as `s2kf model` draws it): the posture fixes the "
+                   "markers' placement about the joints that no moving recording can tell");
+      app.add_option("--static-sd", settings->static_sd_deg,
+                     "with --static: how far (SD, degrees) each joint may be from the zero pose (default 3)")
+          ->check(CLI::Range(0.1, 90.0));
       app.add_flag("!--uniform-noise", settings->noise_from_calibration,
                    "write no per-marker noise into the subject file (default: each marker's noise_mm "
                    "follows its calibration residual, 0.5-2 times the tracker's common 10 mm)");

@@ -106,3 +106,42 @@ TEST(CalibrateCommand, ShrinkOptionPullsTheOffsetsTowardsTheMarkerSet) {
 }
 
 }  // namespace
+
+namespace {
+
+// --static calibrates a static trial in the model's zero pose (the bundled `static` motion
+// simulated): the report records the posture's SD, the subject differs from the one calibrated
+// without it, and a nonsensical SD is refused by name.
+TEST(CalibrateCommand, StaticTrialIsCalibratedInTheZeroPose) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static";
+  fs::create_directories(dir);
+  const std::string recording = (dir / "static.c3d").string();
+  const auto [simulated, simulate_output] =
+      test_support::run_command("simulate --motion static --seed 3 --out " + recording);
+  ASSERT_EQ(simulated, 0) << simulate_output;
+  const auto calibrated = [&](const std::string& name, const std::string& options) {
+    const std::string subject = (dir / (name + ".json")).string();
+    const auto [status, output] =
+        test_support::run_command("calibrate " + recording + " --quiet " + options + " --out " + subject);
+    EXPECT_EQ(status, 0) << output;
+    std::ifstream report((dir / (name + "_report.json")).string());
+    return std::make_pair(cli::load_marker_set(subject), nlohmann::json::parse(report));
+  };
+  const auto [posed_set, posed_report] = calibrated("posed", "--static");
+  const auto [free_set, free_report] = calibrated("free", "");
+  EXPECT_EQ(posed_report["static_pose_sd_deg"].get<double>(), 3.0);
+  EXPECT_TRUE(free_report["static_pose_sd_deg"].is_null());
+  double largest = 0;
+  for (std::size_t m = 0; m < posed_set.entries.size(); ++m)
+    largest = std::max(largest, (posed_set.entries[m].offset - free_set.entries[m].offset).norm());
+  EXPECT_GT(largest, 1.0);  // at the reference height, mm: the posture moved some markers
+  const auto [bad, bad_output] =
+      test_support::run_command("calibrate " + recording + " --static --static-sd 0 --out " +
+                                (dir / "bad.json").string());
+  EXPECT_NE(bad, 0);
+  EXPECT_NE(bad_output.find("--static-sd"), std::string::npos) << bad_output;
+  EXPECT_FALSE(fs::exists(dir / "bad.json"));
+}
+
+}  // namespace

@@ -185,7 +185,7 @@ TEST(Recording, HiddenMarkersAreNaNAndPlannedLossesHideWhatTheySay) {
 TEST(BundledMotions, StayWithinTheJointLimitsAtEveryFrameAndMovePlausibly) {
   const cli::JointTable joints = model_joints();
   for (const char* name : {"handstand", "walk", "squats", "jumping_jacks", "arm_circles", "cartwheel",
-                           "forward_roll", "random_sweep"}) {
+                           "forward_roll", "random_sweep", "static"}) {
     const KeyframeMotion motion = bundled_motion(name);
     const InterpolatedMotion trajectory(motion);
     double fastest_joint = 0, fastest_root = 0;

@@ -95,7 +95,7 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
     if (k < 0 || k >= recording.frames())
       throw std::invalid_argument("identifiable_subject: a calibration frame lies outside the recording");
     const body::Pose& pose = recording.truth[static_cast<std::size_t>(k)];
-    detail::BundleFrame frame{k, pose.root_position, pose.root_rotation(), pose.joints, {}};
+    detail::BundleFrame frame{k, pose.root_position, pose.root_rotation(), pose.joints, {}, {}};
     for (int m = 0; m < truth.marker_count(); ++m)
       if (recording.visible(m, k) && recording.frame(k).col(m).allFinite()) frame.markers.push_back(m);
     if (frame.markers.size() >= 3) adjusted.push_back(std::move(frame));

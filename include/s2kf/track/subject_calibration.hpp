@@ -94,6 +94,12 @@ struct CalibrationOptions {
   /// flexion and root orientation of 12 simulated realistic cases better on the means than none,
   /// with and without occlusion (docs/tracking.md, "Shrinking the weakly seen directions").
   double weak_direction_shrink = 0.03;
+  /// > 0: the recording is a static trial in the model's zero pose (standing upright, every joint
+  /// angle 0): each adjusted frame's joint angles get a Gaussian prior at 0 with this SD (rad).
+  /// The posture then fixes what no moving recording can tell apart, an end segment's markers
+  /// turned about its joint against a constant offset of that joint's angles (the gauges), where
+  /// otherwise the marker set's placement decides it. 0: no prior on the poses.
+  double static_pose_sd_rad = 0;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
   int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
   /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
@@ -120,6 +126,8 @@ struct CalibrationOptions {
       throw std::invalid_argument("calibration: the prior-only fraction must lie in [0, 1)");
     if (!(weak_direction_shrink >= 0) || !std::isfinite(weak_direction_shrink))
       throw std::invalid_argument("calibration: the weak-direction shrinkage must be finite and >= 0");
+    if (!(static_pose_sd_rad >= 0) || !std::isfinite(static_pose_sd_rad))
+      throw std::invalid_argument("calibration: the static pose's SD must be finite and >= 0");
     if (skip_frames < 0 || stride < 1)
       throw std::invalid_argument("calibration: skip_frames >= 0 and stride >= 1");
     if (threads < 1) throw std::invalid_argument("calibration: at least 1 thread is needed");
@@ -216,6 +224,9 @@ struct BundleFrame {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::VectorXd joints;
   std::vector<int> markers;
+  /// The joint angles a Gaussian prior pulls this frame's towards (CalibrationOptions::
+  /// static_pose_sd_rad); empty: none.
+  Eigen::VectorXd prior_joints;
 };
 
 /// RMS distance (mm) per model marker between the recording and `model` at the frames' poses,
@@ -448,8 +459,12 @@ class BundleAdjustment {
     std::vector<double> chunk_sum(kCalibrationChunks, 0.0);
     for_each_chunk(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(frames.size(), c);
-      for (std::size_t k = begin; k < end; ++k)
+      for (std::size_t k = begin; k < end; ++k) {
         chunk_sum[static_cast<std::size_t>(c)] += frame_residual_sum(model, frames[k], true);
+        if (frames[k].prior_joints.size() > 0)
+          chunk_sum[static_cast<std::size_t>(c)] +=
+              pose_prior_weight() * (frames[k].joints - frames[k].prior_joints).squaredNorm();
+      }
     });
     double sum = 0;
     for (double part : chunk_sum) sum += part;
@@ -463,6 +478,10 @@ class BundleAdjustment {
       sum += e.dot(shrink_ * e);
     }
     return sum;
+  }
+
+  double pose_prior_weight() const {
+    return 1.0 / (options_.static_pose_sd_rad * options_.static_pose_sd_rad);
   }
 
   /// The used markers' offsets minus the marker set's, stacked as the subject unknowns order them.
@@ -530,6 +549,14 @@ class BundleAdjustment {
         C.block(0, at, scales_, 3).noalias() += w * js.transpose() * ro;
         C.block(at, 0, 3, scales_).noalias() += w * ro.transpose() * js;
         h.head(scales_).noalias() += w * js.transpose() * r;
+      }
+    }
+    // The static posture's prior on the joint angles (its Jacobian is the identity).
+    if (frame.prior_joints.size() > 0) {
+      const double w = pose_prior_weight();
+      for (int j = 0; j < model.joint_count(); ++j) {
+        A(kRoot + j, kRoot + j) += w;
+        g(kRoot + j) += w * (frame.prior_joints(j) - frame.joints(j));
       }
     }
     // Active set: a joint on a limit that the gradient pushes further out stays there for this
@@ -887,6 +914,7 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
         else
           frames[k].markers.push_back(static_cast<int>(u));
       }
+      if (options.static_pose_sd_rad > 0) frames[k].prior_joints = Eigen::VectorXd::Zero(model.joint_count());
       // A frame's pose is determined only with 3 or more markers.
       if (frames[k].markers.size() >= 3) kept.push_back(std::move(frames[k]));
     }
@@ -922,7 +950,8 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
       throw std::invalid_argument("calibration: a posed frame lies outside the recording");
     if (pose.joints.size() != model.joint_count())
       throw std::invalid_argument("calibration: a pose has another joint count than the model");
-    detail::BundleFrame frame{index, pose.root_position, pose.root_rotation(), pose.joints, {}};
+    detail::BundleFrame frame{index, pose.root_position, pose.root_rotation(), pose.joints, {}, {}};
+    if (options.static_pose_sd_rad > 0) frame.prior_joints = Eigen::VectorXd::Zero(model.joint_count());
     const auto points = recording.frame(index);
     for (std::size_t u = 0; u < used.size(); ++u) {
       const int point = mapping.point_of_marker[static_cast<std::size_t>(used[u])];
