@@ -68,7 +68,8 @@ void run_calibrate(const CalibrateSettings& settings) {
   options.calibration.estimate_segment_scales = !settings.no_scales;
   options.calibration.weak_direction_shrink = settings.shrink;
   options.noise_from_calibration = settings.noise_from_calibration;
-  if (settings.static_pose) options.calibration.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
+  if (settings.static_pose)
+    options.calibration.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
   track::Session session;
   try {
     session =
@@ -117,7 +118,8 @@ void run_calibrate(const CalibrateSettings& settings) {
       {"stretches", session.calibration_stretches},
       {"iterations", settings.iterations},
       {"weak_direction_shrink", settings.shrink},
-      {"static_pose_sd_deg", settings.static_pose ? nlohmann::json(settings.static_sd_deg) : nlohmann::json(nullptr)},
+      {"static_pose_sd_deg",
+       settings.static_pose ? nlohmann::json(settings.static_sd_deg) : nlohmann::json(nullptr)},
       {"segment_scale", calibration.segment_scale},
       {"passes", passes},
       {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},

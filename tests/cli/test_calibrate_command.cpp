@@ -136,9 +136,8 @@ TEST(CalibrateCommand, StaticTrialIsCalibratedInTheZeroPose) {
   for (std::size_t m = 0; m < posed_set.entries.size(); ++m)
     largest = std::max(largest, (posed_set.entries[m].offset - free_set.entries[m].offset).norm());
   EXPECT_GT(largest, 1.0);  // at the reference height, mm: the posture moved some markers
-  const auto [bad, bad_output] =
-      test_support::run_command("calibrate " + recording + " --static --static-sd 0 --out " +
-                                (dir / "bad.json").string());
+  const auto [bad, bad_output] = test_support::run_command(
+      "calibrate " + recording + " --static --static-sd 0 --out " + (dir / "bad.json").string());
   EXPECT_NE(bad, 0);
   EXPECT_NE(bad_output.find("--static-sd"), std::string::npos) << bad_output;
   EXPECT_FALSE(fs::exists(dir / "bad.json"));

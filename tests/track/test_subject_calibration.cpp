@@ -1,9 +1,9 @@
 // Subject calibration: on synthetic recordings of a subject who differs from the model (placement
 // offsets, bone lengths), the calibration must move the model towards the true subject.
 #include <s2kf/body/body_model.hpp>
-#include <s2kf/core/constants.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/constants.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
@@ -320,15 +320,16 @@ TEST(SubjectCalibration, AStaticTrialFixesTheGauges) {
   const auto calibrated = [&](double sd_rad) {
     track::CalibrationOptions o = options;
     o.static_pose_sd_rad = sd_rad;
-    return track::calibrate_subject(model, mapping, fast_options(), recording, test::tracker_samples(fast_options()), o)
+    return track::calibrate_subject(model, mapping, fast_options(), recording,
+                                    test::tracker_samples(fast_options()), o)
         .model;
   };
   const double before = offset_error(model, subject, false);
   const double free = offset_error(calibrated(0.0), subject, false);
   const body::BodyModel posed_model = calibrated(3.0 * kPi / 180.0);
   const double posed = offset_error(posed_model, subject, false);
-  std::cout << "offset error, gauges included: marker set " << before << " mm, static trial without the posture "
-            << free << " mm, with it " << posed << " mm\n";
+  std::cout << "offset error, gauges included: marker set " << before
+            << " mm, static trial without the posture " << free << " mm, with it " << posed << " mm\n";
   // Measured: 13.7 mm as placed, 6.5 without the posture, 2.4 with it (what remains is the whole
   // body's markers moved rigidly against the root's pose, which only the offsets' prior decides).
   EXPECT_GT(before, 10.0);
