@@ -842,8 +842,10 @@ SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerM
 /// adjusts `model` (its bone-length factors and marker offsets, with the priors of `options`)
 /// together with the poses on the frames `poses` names, each with every visible mapped marker
 /// (no outliers are left out). With the true poses of a simulated recording it shows what the
-/// calibration's objective reaches apart from the poses the tracker gives it. The result has the
-/// adjusted model, its length factors and one pass; frames with fewer than 3 markers are skipped.
+/// calibration's objective reaches apart from the poses the tracker gives it. With
+/// options.static_pose_sd_rad > 0 every frame's joint angles get the static trial's prior at the
+/// zero pose, as in calibrate_subject. The result has the adjusted model, its length factors, its
+/// per-marker residuals and one pass; frames with fewer than 3 markers are skipped.
 SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model, const MarkerMapping& mapping,
                                            const TrackerOptions& tracker_options,
                                            const MarkerSequence& recording,
