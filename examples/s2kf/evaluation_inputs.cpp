@@ -154,10 +154,9 @@ json calibration_at_true_poses_reference(const track::Session& setup, const Simu
   const DefaultCalibration c = default_calibration(setup, simulated);
   std::vector<std::pair<long, body::Pose>> poses;
   for (long k : c.frames) poses.emplace_back(k, simulated.recording.truth[static_cast<std::size_t>(k)]);
-  track::MarkerMapping mapping;
-  for (int m = 0; m < c.nominal.marker_count(); ++m) mapping.point_of_marker.push_back(m);
   const track::SubjectCalibration adjusted = track::adjust_subject_at_poses(
-      c.nominal, mapping, setup.tracker, simulated.recording, poses, c.options);
+      c.nominal, track::map_markers(simulated.recording.labels, c.nominal.marker_names()), setup.tracker,
+      simulated.recording, poses, c.options);
   const track::CalibrationPass& pass = adjusted.passes.front();
   return {{"frames_used", pass.frames_used},
           {"bundle_iterations", pass.bundle_iterations},

@@ -90,16 +90,14 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
                                       marker_noise_mm * marker_noise_mm);
 
   // The calibration frames at their true poses, each with its visible markers.
-  std::vector<detail::BundleFrame> adjusted;
+  std::vector<std::pair<long, body::Pose>> poses;
   for (long k : frames) {
     if (k < 0 || k >= recording.frames())
       throw std::invalid_argument("identifiable_subject: a calibration frame lies outside the recording");
-    const body::Pose& pose = recording.truth[static_cast<std::size_t>(k)];
-    detail::BundleFrame frame{k, pose.root_position, pose.root_rotation(), pose.joints, {}, {}};
-    for (int m = 0; m < truth.marker_count(); ++m)
-      if (recording.visible(m, k) && recording.frame(k).col(m).allFinite()) frame.markers.push_back(m);
-    if (frame.markers.size() >= 3) adjusted.push_back(std::move(frame));
+    poses.emplace_back(k, recording.truth[static_cast<std::size_t>(k)]);
   }
+  std::vector<detail::BundleFrame> adjusted =
+      detail::frames_at_poses(mapping, recording, adjustment.used(), poses, truth.joint_count(), false);
   if (adjusted.empty())
     throw std::invalid_argument("identifiable_subject: no calibration frame shows 3 markers");
 

@@ -253,6 +253,34 @@ inline std::vector<double> marker_residual_rms(const body::BodyModel& model, con
   return rms;
 }
 
+/// The bundle adjustment's frames at given poses, each with every used marker (its index into
+/// `used`) the recording shows there and, with `static_prior`, the static trial's prior at the zero
+/// pose; frames with fewer than 3 such markers are left out. Throws std::invalid_argument for a
+/// frame outside the recording or a pose with another joint count than `joint_count`.
+inline std::vector<BundleFrame> frames_at_poses(const MarkerMapping& mapping, const MarkerSequence& recording,
+                                                const std::vector<int>& used,
+                                                const std::vector<std::pair<long, body::Pose>>& poses,
+                                                Eigen::Index joint_count, bool static_prior) {
+  std::vector<BundleFrame> frames;
+  for (const auto& [index, pose] : poses) {
+    if (index < 0 || index >= recording.frame_count())
+      throw std::invalid_argument("calibration: a posed frame lies outside the recording");
+    if (pose.joints.size() != joint_count)
+      throw std::invalid_argument("calibration: a pose has another joint count than the model");
+    BundleFrame frame{index, pose.root_position, pose.root_rotation(), pose.joints, {}, {}};
+    const auto points = recording.frame(index);
+    for (std::size_t u = 0; u < used.size(); ++u) {
+      const int point = mapping.point_of_marker[static_cast<std::size_t>(used[u])];
+      if (point < points.cols() && recording.visible(point, index) && points.col(point).allFinite())
+        frame.markers.push_back(static_cast<int>(u));
+    }
+    if (frame.markers.size() < 3) continue;
+    if (static_prior) frame.prior_joints = Eigen::VectorXd::Zero(joint_count);
+    frames.push_back(std::move(frame));
+  }
+  return frames;
+}
+
 /// Tracks all frames; returns the poses of the frames usable for calibration and the pass's mean
 /// marker distance after convergence. The stretches (split at options.restart_frames) are
 /// independent, each tracked by a tracker of its own, on up to options.threads threads.
@@ -355,6 +383,12 @@ class BundleAdjustment {
   const std::vector<int>& used() const { return used_; }
   const std::vector<std::string>& segments() const { return segments_; }
   const std::vector<double>& cumulative() const { return cumulative_; }
+  /// The bone-length factor of each scalable segment since the start, by segment name.
+  std::map<std::string, double> segment_scale() const {
+    std::map<std::string, double> scale;
+    for (std::size_t s = 0; s < segments_.size(); ++s) scale[segments_[s]] = cumulative_[s];
+    return scale;
+  }
 
   /// The data-over-prior information ratio below which prior_only_fraction = `fraction` leaves a
   /// direction to the prior, for `frames` frames: that fraction of the ratio of one marker
@@ -926,8 +960,7 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
     result.passes.push_back(pass);
     result.marker_residual_rms_mm = detail::marker_residual_rms(result.model, mapping, recording, used, kept);
   }
-  for (std::size_t s = 0; s < adjustment.segments().size(); ++s)
-    result.segment_scale[adjustment.segments()[s]] = adjustment.cumulative()[s];
+  result.segment_scale = adjustment.segment_scale();
   result.mean_marker_distance_before_mm = result.passes.front().mean_marker_distance_mm;
   if (options.final_pass) result.mean_marker_distance_after_mm = result.passes.back().mean_marker_distance_mm;
   return result;
@@ -946,22 +979,8 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
   detail::BundleAdjustment adjustment(model, mapping, recording, options,
                                       tracker_options.marker_noise_mm * tracker_options.marker_noise_mm);
   const std::vector<int>& used = adjustment.used();
-  std::vector<detail::BundleFrame> frames;
-  for (const auto& [index, pose] : poses) {
-    if (index < 0 || index >= recording.frame_count())
-      throw std::invalid_argument("calibration: a posed frame lies outside the recording");
-    if (pose.joints.size() != model.joint_count())
-      throw std::invalid_argument("calibration: a pose has another joint count than the model");
-    detail::BundleFrame frame{index, pose.root_position, pose.root_rotation(), pose.joints, {}, {}};
-    if (options.static_pose_sd_rad > 0) frame.prior_joints = Eigen::VectorXd::Zero(model.joint_count());
-    const auto points = recording.frame(index);
-    for (std::size_t u = 0; u < used.size(); ++u) {
-      const int point = mapping.point_of_marker[static_cast<std::size_t>(used[u])];
-      if (point < points.cols() && recording.visible(point, index) && points.col(point).allFinite())
-        frame.markers.push_back(static_cast<int>(u));
-    }
-    if (frame.markers.size() >= 3) frames.push_back(std::move(frame));
-  }
+  std::vector<detail::BundleFrame> frames = detail::frames_at_poses(
+      mapping, recording, used, poses, model.joint_count(), options.static_pose_sd_rad > 0);
   if (frames.empty()) throw std::invalid_argument("calibration: no posed frame shows 3 or more markers");
   SubjectCalibration result;
   result.model = model;
@@ -970,8 +989,7 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
   adjustment.adjust(result.model, frames, pass);
   result.passes.push_back(pass);
   result.marker_residual_rms_mm = detail::marker_residual_rms(result.model, mapping, recording, used, frames);
-  for (std::size_t s = 0; s < adjustment.segments().size(); ++s)
-    result.segment_scale[adjustment.segments()[s]] = adjustment.cumulative()[s];
+  result.segment_scale = adjustment.segment_scale();
   result.mean_marker_distance_before_mm = std::numeric_limits<double>::quiet_NaN();
   return result;
 }
