@@ -13,6 +13,7 @@ and prints Markdown tables of the means (segment orientation, limb flexion, root
 in degrees, root position RMS and mean marker distance in mm), one per occlusion mode and seed set.
 
     scripts/static-trial-table.py [--s2kf build/s2kf] [--seeds 1,2,3] [--out DIR] [--raw FILE.json]
+                                  [--occlusion none,paper] [--extra="--smooth"]
 """
 import argparse
 import json
@@ -28,6 +29,7 @@ parser.add_argument("--occlusion", default="none,paper", help="none, paper or bo
 parser.add_argument("--static-motion", default="static", help="the static trial's motion (name or .json)")
 parser.add_argument("--out", default="results/static-trial")
 parser.add_argument("--raw", default="", help="write every run's figures to this JSON file")
+parser.add_argument("--extra", default="", help="more options for every s2kf track, space-separated (--smooth)")
 args = parser.parse_args()
 PAPER_OCCLUSION = "0.005,100"
 CONFIGS = ("default", "static", "both")
@@ -55,8 +57,8 @@ for seed in args.seeds.split(","):
             for config in CONFIGS:
                 option = {"default": [], "static": ["--subject", subject], "both": ["--markerset", subject]}[config]
                 prefix = f"{base}_{config}"
-                run("track", base + ".c3d", "--truth", base + "_truth.csv", *option, "--formats", "csv",
-                    "--quiet", "--out", prefix)
+                run("track", base + ".c3d", "--truth", base + "_truth.csv", *option, *args.extra.split(),
+                    "--formats", "csv", "--quiet", "--out", prefix)
                 with open(prefix + ".json") as f:
                     summary = json.load(f)
                 row = {"motion": motion, "seed": int(seed), "occlusion": occlusion, "config": config,

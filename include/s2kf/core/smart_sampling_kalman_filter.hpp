@@ -92,6 +92,17 @@ struct UpdateOptions {
   /// symmetric sample sets (pairs +z, -z, on which the products are uncorrelated with the state);
   /// at most 6 coordinates, each once. Null or empty: none. Read during update() only.
   const std::vector<int>* information_quadratic_states = nullptr;
+  /// Which state coordinates each block's predictions depend on: one list of state indices per
+  /// block of `block_size` components (a marker reads the root's pose and the joints between the
+  /// root and its segment). Null: every block reads every state. A state that no observed block
+  /// reads is not correlated with this measurement except through its prior correlation with the
+  /// states that are read, but a finite sample set gives it a sample cross-covariance all the same;
+  /// with innovations that keep their sign frame after frame (a hidden hand while the body moves)
+  /// that noise moves the state steadily. With the lists, the update takes the cross-covariance of
+  /// the unread states u as their prior regression on the read states o, P_uo P_oo^-1 Cov(x_o, y),
+  /// which is exact for a model that reads only x_o: in the whitened coordinates, the regression
+  /// projected onto the read states' span. Both gains; read during update() only.
+  const std::vector<std::vector<int>>* block_dependencies = nullptr;
 };
 
 struct UpdateResult {
@@ -184,6 +195,20 @@ class FilterCore {
     factor_.compute(posterior_covariance_);
     return factor_.info() == Eigen::Success;
   }
+
+  /// UpdateOptions::block_dependencies, after the samples are drawn (it needs the prior's factor
+  /// S) and the buffers reserved (m: the measurement's dimension): the states no observed block reads (u) and
+  /// an orthonormal basis Q of their whitened directions, W = S^-1 E_u orthonormalised as W L^-T with W^T W =
+  /// L L^T. Returns |u| (0 without the lists or when every state is read).
+  Eigen::Index prepare_unread_states(Eigen::Index n, Eigen::Index m, const UpdateOptions& options);
+
+  /// Removes the unread states' directions from the whitened regression G^T (n x columns): the
+  /// regression on the read states alone (UpdateOptions::block_dependencies).
+  void project_out_unread(Eigen::Ref<Eigen::MatrixXd> whitened_regression);
+
+  /// The same for the ordinary update's Cyx (observed x n): with Z = S^-1 Cxy and C = Q^T Z,
+  /// Cxy - S Q C, where S Q = E_u L^-T, so only the unread states' columns of Cyx change.
+  void localise_cross_covariance(Eigen::Block<Eigen::MatrixXd>& cyx);
 
   /// Whether the information form applies to this update (see UpdateOptions::information_form).
   bool information_form_applies(const Eigen::MatrixXd& r, const UpdateOptions& options) const;
@@ -422,6 +447,12 @@ class FilterCore {
   Eigen::VectorXd component_spread_;           ///< per observed component: sum w (y_i - y^)^2
   double block_limit_probability_ = 0;
   double block_limit_[kMaxBlock + 1] = {};  ///< chi-square quantiles by degrees of freedom
+  // UpdateOptions::block_dependencies: per state whether an observed block reads it, the unread
+  // states, their whitened basis Q (n x |u|), the factor L of W^T W, and scratch.
+  std::vector<char> state_read_;
+  Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> unread_states_;
+  Eigen::Index unread_count_ = 0;
+  Eigen::MatrixXd unread_basis_, unread_factor_, unread_whitened_, unread_coefficients_;
 };
 
 }  // namespace detail
@@ -602,6 +633,17 @@ S2KF_INLINE UpdateResult FilterCore::begin_update(Eigen::Index state_dimension, 
     throw DimensionError("update: the block size must divide the measurement dimension");
   set_groups(m, options);
   set_quadratic_states(n, options);
+  if (options.block_dependencies != nullptr) {
+    const std::vector<std::vector<int>>& lists = *options.block_dependencies;
+    if (static_cast<Eigen::Index>(lists.size()) != m / options.block_size)
+      throw DimensionError("update: " + std::to_string(lists.size()) + " block dependency lists for " +
+                           std::to_string(m / options.block_size) + " blocks");
+    for (const std::vector<int>& list : lists)
+      for (const int state : list)
+        if (state < 0 || state >= n)
+          throw DimensionError("update: a block dependency names state " + std::to_string(state) + " of " +
+                               std::to_string(n));
+  }
 
   UpdateResult result;
   rejected_blocks_.clear();
@@ -632,6 +674,7 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
   // exactly zero-mean deviations S z_i for x.
   const bool single = options.single_precision_moments && positive_weights_;
   reserve_moment_buffers(y.size(), n, single, options.information_form);
+  prepare_unread_states(n, y.size(), options);
   auto cyy = cyy_buffer(mo);
   bool deviations_scaled = false;
   if (information_form_applies(r, options)) {
@@ -642,6 +685,7 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
     // The regression and each component's spread decide whether the form applies; the groups'
     // blocks of Cyy are summed only where it does, so a frame that falls back does not pay for them.
     accumulate_regression(single);
+    if (unread_count_ > 0) project_out_unread(regression_.block(quadratic_count_, 0, n, mo));
     if (information_form_nonlinearity(r) <= options.information_form_max_nonlinearity) {
       if (single)
         add_diagonal_block_moments(cyy, y_dev_f_.topLeftCorner(mo, samples_.count()), block_products_f_);
@@ -657,6 +701,7 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
     for (Eigen::Index i = j; i < mo; ++i) cyy(i, j) = r(index_(i), index_(j));
   auto cyx = cyx_buffer(mo, n);
   accumulate_moments(cyy, cyx, single, deviations_scaled);
+  if (unread_count_ > 0) localise_cross_covariance(cyx);
   // The outlier gate reads each marker's predicted covariance off the diagonal blocks of Cyy and
   // drops the rows (and columns) of the blocks it rejects.
   if (options.block_gate_probability > 0 && positive_weights_)
@@ -734,6 +779,72 @@ S2KF_INLINE void FilterCore::set_quadratic_states(Eigen::Index n, const UpdateOp
   }
   const auto d = static_cast<Eigen::Index>(states.size());
   if (options.information_form && symmetric_) quadratic_count_ = d * (d + 1) / 2;
+}
+
+S2KF_INLINE Eigen::Index FilterCore::prepare_unread_states(Eigen::Index n, Eigen::Index m,
+                                                           const UpdateOptions& options) {
+  unread_count_ = 0;
+  if (options.block_dependencies == nullptr) return 0;
+  const std::vector<std::vector<int>>& lists = *options.block_dependencies;
+  // Sized for the whole measurement on the first update with the lists, whatever is unread then,
+  // so that a later frame with unread states allocates nothing.
+  if (unread_basis_.rows() != n || unread_whitened_.cols() < m) {
+    unread_states_.resize(n);
+    unread_basis_.resize(n, n);
+    unread_factor_.resize(n, n);
+    unread_whitened_.resize(n, m);
+    unread_coefficients_.resize(n, m);
+  }
+  state_read_.assign(static_cast<std::size_t>(n), 0);
+  for (Eigen::Index k = 0, last = -1; k < observed_count_; ++k) {
+    const Eigen::Index block = index_(k) / options.block_size;
+    if (block == last) continue;
+    last = block;
+    for (const int state : lists[static_cast<std::size_t>(block)])
+      state_read_[static_cast<std::size_t>(state)] = 1;
+  }
+  for (Eigen::Index j = 0; j < n; ++j)
+    if (!state_read_[static_cast<std::size_t>(j)]) unread_states_(unread_count_++) = j;
+  const Eigen::Index u = unread_count_;
+  if (u == 0) return 0;
+  // W = S^-1 E_u, then [W^T W; W] factorised in place into [L; W L^-T] = [L; Q].
+  auto w = unread_basis_.leftCols(u);
+  w.setZero();
+  for (Eigen::Index j = 0; j < u; ++j) w(unread_states_(j), j) = 1;
+  factor_.matrixL().solveInPlace(w);
+  bordered_.resize(u, n);
+  auto panel = bordered_.panel();
+  auto gram = panel.topRows(u);
+  gram.template triangularView<Eigen::Lower>().setZero();
+  rank_update_lower(gram, w.transpose());  // W^T W, lower half
+  panel.bottomRows(n) = w;
+  if (!bordered_.factorise()) {  // only if S is singular to rounding: then keep the plain update
+    unread_count_ = 0;
+    return 0;
+  }
+  w = panel.bottomRows(n);
+  unread_factor_.topLeftCorner(u, u).template triangularView<Eigen::Lower>() =
+      panel.topRows(u).template triangularView<Eigen::Lower>();
+  return u;
+}
+
+S2KF_INLINE void FilterCore::project_out_unread(Eigen::Ref<Eigen::MatrixXd> whitened_regression) {
+  const Eigen::Index u = unread_count_, columns = whitened_regression.cols();
+  const auto q = unread_basis_.leftCols(u);
+  auto c = unread_coefficients_.topLeftCorner(u, columns);
+  c.noalias() = q.transpose() * whitened_regression;
+  whitened_regression.noalias() -= q * c;
+}
+
+S2KF_INLINE void FilterCore::localise_cross_covariance(Eigen::Block<Eigen::MatrixXd>& cyx) {
+  const Eigen::Index u = unread_count_, n = cyx.cols(), mo = cyx.rows();
+  auto z = unread_whitened_.topLeftCorner(n, mo);
+  z = cyx.transpose();
+  factor_.matrixL().solveInPlace(z);
+  auto c = unread_coefficients_.topLeftCorner(u, mo);
+  c.noalias() = unread_basis_.leftCols(u).transpose() * z;
+  unread_factor_.topLeftCorner(u, u).template triangularView<Eigen::Lower>().transpose().solveInPlace(c);
+  for (Eigen::Index j = 0; j < u; ++j) cyx.col(unread_states_(j)) -= c.row(j).transpose();
 }
 
 S2KF_INLINE bool FilterCore::information_form_applies(const Eigen::MatrixXd& r,

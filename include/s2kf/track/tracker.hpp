@@ -185,6 +185,7 @@ class Tracker {
   body::MarkerMeasurementModel mean_markers_model_;  ///< every model marker, for the reported pose
   std::vector<int> used_markers_;        ///< model markers in the measurement, body part by body part
   std::vector<int> information_groups_;  ///< per measurement component: its marker's body part
+  std::vector<std::vector<int>> marker_dependencies_;  ///< per used marker: the states it reads
   /// The state's orientation error (3-5): every body part hangs from it, so the second order of
   /// its error is the nonlinearity the parts share (UpdateOptions::information_quadratic_states).
   std::vector<int> root_orientation_states_ = {3, 4, 5};
@@ -235,6 +236,15 @@ S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping, Track
   });
   for (const int m : used_markers_)
     information_groups_.insert(information_groups_.end(), 3, part_of_marker[static_cast<std::size_t>(m)]);
+  // Each marker reads the root's pose and the joints from the root to its segment.
+  for (const int m : used_markers_) {
+    std::vector<int> states(kRootDofs);
+    for (int k = 0; k < kRootDofs; ++k) states[static_cast<std::size_t>(k)] = k;
+    for (int frame = model_.markers[static_cast<std::size_t>(m)].frame; frame > 0;
+         frame = model_.joints[static_cast<std::size_t>(frame - 1)].parent_frame)
+      states.push_back(kRootDofs + frame - 1);
+    marker_dependencies_.push_back(std::move(states));
+  }
   measurement_model_.select_markers(used_markers_);
   measurement_model_.set_single_precision(options_.single_precision_kinematics);  // not the reported markers
   const int n = state_dimension();
@@ -352,6 +362,7 @@ S2KF_INLINE const FrameEstimate& Tracker::process(const Eigen::Matrix3Xd& points
   update_options.information_groups = &information_groups_;
   if (options_.information_form_root_products)
     update_options.information_quadratic_states = &root_orientation_states_;
+  if (options_.marker_dependencies) update_options.block_dependencies = &marker_dependencies_;
   ++frames_since_start_;
   estimate_.status = FilterStatus::nothing_observed;
   estimate_.nis = std::numeric_limits<double>::quiet_NaN();

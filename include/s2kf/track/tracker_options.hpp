@@ -95,6 +95,13 @@ struct TrackerOptions {
   /// orientation, which every body part shares, is then kept instead of left out with the other
   /// cross-part correlations.
   bool information_form_root_products = false;
+  /// Tell the update which states each marker depends on (UpdateOptions::block_dependencies: the
+  /// root's pose and the joints between the root and the marker's segment). A joint that no
+  /// visible marker depends on (a hand whose markers are all hidden) is then moved only through
+  /// its prior correlation with the joints the markers see, not by the sample set's spurious
+  /// cross-covariance, which moved such a hand steadily, tens of degrees over half a second of a
+  /// walk (docs/tracking.md).
+  bool marker_dependencies = true;
 
   /// After every update each joint's Theta is kept learnable (keep_joint_parameters_learnable):
   /// its mean at least this far (rad) inside +-pi/2, where the sine's slope vanishes and a joint
@@ -215,6 +222,7 @@ S2KF_INLINE TrackerOptions paper_preset(double rate_hz) {
   o.marker_gate_probability = 0;  // the paper has no per-marker gate
   o.frozen_marker_s = 0;
   o.axial_split_sd_rad = 0;
+  o.marker_dependencies = false;  // the paper's filter sees every state in every marker
   return o;
 }
 
