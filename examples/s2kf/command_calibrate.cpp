@@ -1,5 +1,6 @@
 // `s2kf calibrate`: estimate a subject (body height, bone lengths, where each marker sits) from a
 // recording of that subject, and write it as a marker-set file `s2kf track --subject` loads.
+#include "calibrated_subject.hpp"
 #include "command.hpp"
 #include "extra_outputs.hpp"
 #include "marker_set_json.hpp"
@@ -27,19 +28,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CalibrateSettings {
+struct CalibrateSettings : SubjectSettings {
   std::string input;
-  std::string markerset;
   std::string out;
-  double height_mm = 0;  // 0: estimate
-  int iterations = 1;
-  long frames = 1200;
   bool quiet = false;
-  bool no_scales = false;
-  double shrink = track::CalibrationOptions{}.weak_direction_shrink;
-  bool noise_from_calibration = true;
-  bool static_pose = false;
-  double static_sd_deg = 3.0;
 };
 
 std::string fixed(double value, int precision) {
@@ -48,44 +40,23 @@ std::string fixed(double value, int precision) {
   return s.str();
 }
 
-void run_calibrate(const CalibrateSettings& settings) {
+void run_calibrate(CalibrateSettings settings) {
   std::unique_ptr<c3d::C3dFrameSource> source;
   try {
     source = std::make_unique<c3d::C3dFrameSource>(settings.input);
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
-  const MarkerSetChoice choice = choose_marker_set_for(source->labels(), settings.markerset, "");
-  track::SessionOptions options;
-  options.height_mm = settings.height_mm;
-  options.fallback_height_mm = 0;  // a subject file needs a real height: refuse instead
-  options.calibrate = true;
-  options.calibration_may_fail = false;
-  options.calibration_frames = settings.frames;
-  options.calibration.iterations = settings.iterations;
-  options.calibration.final_pass = true;
-  options.calibration.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  options.calibration.estimate_segment_scales = !settings.no_scales;
-  options.calibration.weak_direction_shrink = settings.shrink;
-  options.noise_from_calibration = settings.noise_from_calibration;
-  if (settings.static_pose)
-    options.calibration.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
-  track::Session session;
-  try {
-    session =
-        track::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
-  } catch (const std::invalid_argument& e) {
-    throw UserError(settings.input + ": " + e.what());
-  }
+  settings.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const std::string name = fs::path(settings.out).stem().string();
+  const CalibratedSubject calibrated = calibrate_subject(
+      *source, settings.input, settings, cached_sample_set(46, track::TrackerOptions{}.samples), name);
+  const track::Session& session = calibrated.session;
   const track::SubjectCalibration& calibration = *session.calibration;
   const double height = session.height_mm;
   const std::string& height_source = session.height_source;
-  const std::vector<std::string> messages = marker_set_messages(choice, session.mapping);
 
-  const std::string name = fs::path(settings.out).stem().string();
-  const body::MarkerSet subject = subject_marker_set(choice.set, calibration.model, calibration.segment_scale,
-                                                     session.tracker.marker_noise_mm_per_marker, name);
-  nlohmann::json document = marker_set_to_json(subject);
+  const nlohmann::json document = subject_document(calibrated, settings.input);
   nlohmann::json passes = nlohmann::json::array();
   for (const track::CalibrationPass& pass : calibration.passes)
     passes.push_back({{"mean_marker_distance_mm", pass.mean_marker_distance_mm},
@@ -94,12 +65,6 @@ void run_calibrate(const CalibrateSettings& settings) {
                       {"bundle_iterations", pass.bundle_iterations},
                       {"bundle_rms_before_mm", pass.rms_before_mm},
                       {"bundle_rms_after_mm", pass.rms_after_mm}});
-  // The loader rejects unknown keys, so the pass-by-pass report goes to a separate _report.json
-  // and the subject file carries only a one-line summary in its description.
-  document["description"] = subject.description + " on " + fs::path(settings.input).filename().string() +
-                            "; mean marker distance " + fixed(calibration.mean_marker_distance_before_mm, 1) +
-                            " mm before, " + fixed(calibration.mean_marker_distance_after_mm, 1) +
-                            " mm after";
   if (fs::path(settings.out).has_parent_path()) fs::create_directories(fs::path(settings.out).parent_path());
   const auto osim =
       prepare_subject_opensim_model(settings.out, calibration.model, session.mapping);  // SUBJECT.osim
@@ -108,10 +73,12 @@ void run_calibrate(const CalibrateSettings& settings) {
   fs::path report = settings.out;
   report.replace_extension();
   const std::string report_path = report.string() + "_report.json";
+  // The pass-by-pass report goes to a separate _report.json: the subject file's loader rejects
+  // unknown keys.
   const nlohmann::json summary = {
       {"input", settings.input},
-      {"marker_set", choice.set.name},
-      {"marker_set_source", choice.source},
+      {"marker_set", calibrated.choice.set.name},
+      {"marker_set_source", calibrated.choice.source},
       {"height_mm", height},
       {"height_source", height_source},
       {"frames", session.calibration_frames},
@@ -125,10 +92,10 @@ void run_calibrate(const CalibrateSettings& settings) {
       {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},
       {"mean_marker_distance_after_mm", calibration.mean_marker_distance_after_mm},
       {"warnings", session.warnings},
-      {"messages", messages}};
+      {"messages", calibrated.messages}};
   io::write_file_atomically(report_path, [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
   if (settings.quiet) return;
-  for (const std::string& message : messages) std::cout << message << "\n";
+  for (const std::string& message : calibrated.messages) std::cout << message << "\n";
   for (const std::string& warning : session.warnings) std::cout << "warning: " << warning << "\n";
   std::cout << fs::path(settings.input).filename().string() << ": body height " << fixed(height, 0) << " mm ("
             << height_source << "); mean marker distance "

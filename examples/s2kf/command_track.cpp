@@ -1,11 +1,19 @@
 // `s2kf track`: stream C3D recordings through the S2KF tracker and write the motion as CSV, OpenSim
 // .mot, BVH, a JSON summary and a per-frame marker report. The work on one recording is in
 // track_file.cpp; here are the options and the batch.
+#include "calibrated_subject.hpp"
 #include "command.hpp"
 #include "extra_outputs.hpp"
 #include "interruption.hpp"
 #include "recording_batch.hpp"
 #include "track_file.hpp"
+#include "track_summary.hpp"
+#include "tracker_samples.hpp"
+
+#include <s2kf/io/atomic_file.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
+
+#include <nlohmann/json.hpp>
 
 #include <unistd.h>
 
@@ -22,9 +30,48 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void run_track(const TrackSettings& settings) {
+/// --static: the subject calibrated on the static trial in the model's zero pose (as `s2kf
+/// calibrate STATIC --static` does), written to `path` as a subject file before any recording is
+/// tracked with it.
+void calibrate_on_static_trial(const TrackSettings& settings, const std::string& path) {
+  std::unique_ptr<c3d::C3dFrameSource> source;
+  try {
+    source = std::make_unique<c3d::C3dFrameSource>(settings.static_trial);
+  } catch (const std::exception& e) {
+    throw UserError(std::string("--static: ") + e.what());
+  }
+  SubjectSettings subject;
+  subject.markerset = settings.markerset;
+  subject.height_mm = settings.height_mm;
+  subject.noise_from_calibration = settings.noise_from_calibration;
+  subject.static_pose = true;
+  subject.static_sd_deg = settings.static_sd_deg;
+  subject.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int samples = settings.samples > 0 ? settings.samples : track::TrackerOptions{}.samples;
+  const CalibratedSubject calibrated =
+      calibrate_subject(*source, "--static " + settings.static_trial, subject, cached_sample_set(46, samples),
+                        fs::path(path).stem().string());
+  if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
+  const nlohmann::json document = subject_document(calibrated, settings.static_trial);
+  io::write_file_atomically(path, [&](std::ostream& out) { out << document.dump(2) << "\n"; });
+  if (settings.quiet) return;
+  const track::SubjectCalibration& calibration = *calibrated.session.calibration;
+  std::cout << fs::path(settings.static_trial).filename().string() << " (static trial): mean marker distance "
+            << fixed_text(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
+            << fixed_text(calibration.mean_marker_distance_after_mm, 1)
+            << " mm after calibrating in the zero pose; wrote " << path << "\n";
+}
+
+void run_track(const TrackSettings& given) {
+  TrackSettings settings = given;
   if (!settings.markerset.empty() && !settings.subject.empty())
     throw UserError("give --markerset or --subject, not both (a subject file is a calibrated marker set)");
+  if (!settings.static_trial.empty() && !settings.subject.empty())
+    throw UserError(
+        "give --static or --subject, not both (--static calibrates the subject on the static trial)");
+  if (!settings.static_trial.empty() && !settings.calibrate)
+    throw UserError(
+        "--static calibrates the subject on the static trial; it cannot be combined with --no-calibrate");
   if (settings.smooth && settings.method != "s2kf")
     throw UserError("--smooth works on the S2KF's estimates; it cannot be combined with --method baseline");
   const std::vector<Recording> recordings = find_recordings(settings.inputs);
@@ -47,6 +94,18 @@ void run_track(const TrackSettings& settings) {
                 << " recordings\n";
     for (std::size_t i = 0; i < todo.size(); ++i) std::cout << todo[i].input << " -> " << prefixes[i] << "\n";
     return;
+  }
+  if (!settings.static_trial.empty()) {
+    // One subject for every recording: PREFIX_subject.json beside one recording's outputs, else
+    // STATIC-NAME_subject.json in the output folder. The recordings are then tracked with it as
+    // with --subject (its marker set, no calibration on the recording).
+    const std::string path = batch ? (fs::path(settings.out.empty() ? "." : settings.out) /
+                                      (fs::path(settings.static_trial).stem().string() + "_subject.json"))
+                                         .string()
+                                   : prefixes[0] + "_subject.json";
+    calibrate_on_static_trial(settings, path);
+    settings.subject = path;
+    settings.markerset.clear();
   }
   if (!batch) {
     if (fs::path(prefixes[0]).has_parent_path()) fs::create_directories(fs::path(prefixes[0]).parent_path());
@@ -96,6 +155,14 @@ const RegisterCommand track_registration{
       app.add_option("--markerset", settings->markerset,
                      "bundled marker set (kit, cmu, plugin_gait) or a .json file (default: the best match)");
       app.add_option("--subject", settings->subject, "calibrated subject file written by s2kf calibrate");
+      app.add_option("--static", settings->static_trial,
+                     "C3D static trial of the same subject in the model's zero pose (standing upright, "
+                     "arms hanging, every joint angle 0): calibrate the subject on it first (as s2kf "
+                     "calibrate --static, written as PREFIX_subject.json) and track with it, which also "
+                     "fixes the placement no moving recording shows (hands, forearms, feet)");
+      app.add_option("--static-sd", settings->static_sd_deg,
+                     "with --static: how far (SD, degrees) each joint may be from the zero pose (default 3)")
+          ->check(CLI::Range(0.1, 90.0));
       app.add_flag("!--no-calibrate", settings->calibrate,
                    "track with the marker set as it is (default: calibrate marker offsets and bone lengths "
                    "on stretches of frames spread over the recording)");

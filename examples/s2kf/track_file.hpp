@@ -25,6 +25,8 @@ struct TrackSettings {
   std::string method = "s2kf";
   std::string markerset;  // empty: the bundled set that matches best
   std::string subject;    // a calibrated subject file (s2kf calibrate)
+  std::string static_trial;    // a static trial: the subject is calibrated on it first (--static)
+  double static_sd_deg = 3.0;  // --static-sd
   bool calibrate = true;  // calibrate the subject on the recording first (not with --subject)
   int calibration_frames = 1200;
   double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;

@@ -291,13 +291,18 @@ void bind_track(py::module_& module) {
   module.def(
       "track",
       [](const py::object& recording, const py::object& labels, const py::object& rate,
-         const py::object& markerset, const py::object& subject, bool calibrate,
-         std::int64_t calibration_frames, double calibration_shrink, bool uniform_noise, bool smooth,
-         int samples, double height_mm, const std::string& preset, const std::string& method,
-         const py::object& model_output, const py::object& name) {
+         const py::object& markerset, const py::object& subject, const py::object& static_trial,
+         double static_sd, bool calibrate, std::int64_t calibration_frames, double calibration_shrink,
+         bool uniform_noise, bool smooth, int samples, double height_mm, const std::string& preset,
+         const std::string& method, const py::object& model_output, const py::object& name) {
         TrackSettings settings;
         settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();
         settings.subject = subject.is_none() ? std::string() : py::str(subject).cast<std::string>();
+        settings.static_trial =
+            static_trial.is_none() ? std::string() : py::str(static_trial).cast<std::string>();
+        if (!(static_sd >= 0.1 && static_sd <= 90.0))
+          throw py::value_error("static_sd must lie between 0.1 and 90 degrees");
+        settings.static_sd_deg = static_sd;
         settings.calibrate = calibrate;
         settings.calibration_frames = calibration_frames;
         settings.calibration_shrink = calibration_shrink;
@@ -310,8 +315,8 @@ void bind_track(py::module_& module) {
         return track(recording, labels, rate, settings, model_output, name);
       },
       py::arg("recording"), py::arg("labels") = py::none(), py::arg("rate") = py::none(), py::kw_only(),
-      py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("calibrate") = true,
-      py::arg("calibration_frames") = 1200,
+      py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("static") = py::none(),
+      py::arg("static_sd") = 3.0, py::arg("calibrate") = true, py::arg("calibration_frames") = 1200,
       py::arg("calibration_shrink") = track::CalibrationOptions{}.weak_direction_shrink,
       py::arg("uniform_noise") = false, py::arg("smooth") = false, py::arg("samples") = 301,
       py::arg("height_mm") = 0.0, py::arg("preset") = "default", py::arg("method") = "s2kf",
@@ -319,6 +324,8 @@ void bind_track(py::module_& module) {
       "Tracks a whole recording as `s2kf track` does: track('walk.c3d'), track(s2kf.read_c3d(...)), or "
       "track(points, labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
       "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "
+      "static: a C3D static trial in the model's zero pose, on which the subject is calibrated first "
+      "(as `s2kf track --static`; static_sd: each joint's SD from the zero pose there, degrees); "
       "calibrate: fit the subject's offsets and bone lengths on the first calibration_frames frames; "
       "calibration_shrink: C, a weakly seen offset direction keeps mu / (mu + C) of the data's step; "
       "uniform_noise: every marker the same noise (else each its calibration residual's); smooth: "

@@ -1,13 +1,18 @@
 // s2kf.track's work without Python (track_pipeline.hpp).
 #include "track_pipeline.hpp"
 
+#include "calibrated_subject.hpp"  // examples/s2kf: a subject calibrated on a static trial
 #include "marker_set_json.hpp"  // examples/s2kf: bundled marker sets, the automatic choice, messages
 #include "track_summary.hpp"    // examples/s2kf: the summary `s2kf track` writes
 
 #include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
 
+#include <algorithm>
+#include <memory>
 #include <stdexcept>
+#include <thread>
 
 namespace s2kf::python {
 namespace {
@@ -30,8 +35,40 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
     throw cli::UserError(
         input + ": " + std::to_string(source.frame_count()) +
         " frames are too many to smooth in memory; track without smoothing, or split the recording");
-  const cli::MarkerSetChoice choice =
-      cli::choose_marker_set_for(source.labels(), settings.markerset, settings.subject);
+  if (!settings.static_trial.empty() && !settings.subject.empty())
+    throw cli::UserError(
+        "give static or subject, not both (static calibrates the subject on the static trial)");
+  if (!settings.static_trial.empty() && !settings.calibrate)
+    throw cli::UserError(
+        "static calibrates the subject on the static trial; it cannot be combined with calibrate=False");
+  auto result = std::make_unique<TrackResult>();
+  result->samples = lcd_sample_set(6 + body::kJointCount,
+                                   settings.samples > 0 ? settings.samples : track::TrackerOptions{}.samples)
+                        .set;
+  cli::MarkerSetChoice choice;
+  if (!settings.static_trial.empty()) {
+    // As `s2kf track --static`: the subject calibrated on the static trial in the model's zero
+    // pose (`s2kf calibrate --static`), then the recording tracked with it as with a subject file.
+    std::unique_ptr<c3d::C3dFrameSource> static_source;
+    try {
+      static_source = std::make_unique<c3d::C3dFrameSource>(settings.static_trial);
+    } catch (const std::exception& e) {
+      throw cli::UserError(std::string("static: ") + e.what());
+    }
+    cli::SubjectSettings subject;
+    subject.markerset = settings.markerset;
+    subject.height_mm = settings.height_mm;
+    subject.noise_from_calibration = !settings.uniform_noise;
+    subject.static_pose = true;
+    subject.static_sd_deg = settings.static_sd_deg;
+    subject.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    const cli::CalibratedSubject calibrated = cli::calibrate_subject(
+        *static_source, "static " + settings.static_trial, subject, result->samples, name + "_subject");
+    choice.set = calibrated.subject;
+    choice.source = "calibrated on the static trial " + settings.static_trial;
+  } else {
+    choice = cli::choose_marker_set_for(source.labels(), settings.markerset, settings.subject);
+  }
   track::SessionOptions session_options;
   try {
     session_options.tracker = track::preset_options(settings.preset, source.rate_hz());
@@ -40,15 +77,13 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   }
   if (settings.samples > 0) session_options.tracker.samples = settings.samples;
   session_options.height_mm = settings.height_mm;
-  session_options.calibrate = settings.calibrate && settings.subject.empty();
+  session_options.calibrate = settings.calibrate && settings.subject.empty() && settings.static_trial.empty();
   session_options.calibration_frames = settings.calibration_frames;
   session_options.calibration.weak_direction_shrink = settings.calibration_shrink;
   session_options.noise_from_calibration = !settings.uniform_noise;
 
-  auto result = std::make_unique<TrackResult>();
   result->name = name;
   result->point_count = static_cast<Eigen::Index>(source.labels().size());
-  result->samples = lcd_sample_set(6 + body::kJointCount, session_options.tracker.samples).set;
   track::Session& session = result->session;
   try {
     session = track::prepare_session(source, choice.set, session_options, result->samples);

@@ -21,6 +21,8 @@ namespace s2kf::python {
 /// s2kf.track's keyword arguments (the program's options of the same names).
 struct TrackSettings {
   std::string markerset, subject;
+  std::string static_trial;    // a static trial: the subject is calibrated on it first
+  double static_sd_deg = 3.0;  // how far each joint may be from the zero pose there
   bool calibrate = true;
   std::int64_t calibration_frames = 1200;
   double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;

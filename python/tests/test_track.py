@@ -141,3 +141,22 @@ def test_bad_files_are_os_errors(tmp_path):
     (tmp_path / "text.c3d").write_text("not a recording at all, just words\n" * 20)
     with pytest.raises(OSError, match="text.c3d: not a C3D file"):
         s2kf.track(str(tmp_path / "text.c3d"))
+
+
+def test_a_static_trial_calibrates_the_subject_first(cli, tmp_path):
+    """static= does what `s2kf calibrate --static` and then subject= do, in one call."""
+    static, walk = tmp_path / "static.c3d", tmp_path / "walk.c3d"
+    cli("simulate", "--motion", "static", "--seed", "5", "--out", static)
+    cli("simulate", "--motion", "walk", "--seed", "5", "--frames", "150", "--out", walk)
+    cli("calibrate", static, "--static", "--quiet", "--out", tmp_path / "subject.json")
+    one_step = s2kf.track(str(walk), static=str(static))
+    two_steps = s2kf.track(str(walk), subject=str(tmp_path / "subject.json"))
+    np.testing.assert_array_equal(one_step.poses, two_steps.poses)
+    assert one_step.summary["marker_set_source"] == f"calibrated on the static trial {static}"
+    assert one_step.summary["calibration"] is None  # the recording itself is not calibrated on
+    with pytest.raises(ValueError, match="give static or subject, not both"):
+        s2kf.track(str(walk), static=str(static), subject=str(tmp_path / "subject.json"))
+    with pytest.raises(FileNotFoundError, match="^static: missing.c3d: cannot open the file"):
+        s2kf.track(str(walk), static=str(tmp_path / "missing.c3d"))
+    with pytest.raises(ValueError, match="static_sd must lie between"):
+        s2kf.track(str(walk), static=str(static), static_sd=0)

@@ -144,3 +144,56 @@ TEST(CalibrateCommand, StaticTrialIsCalibratedInTheZeroPose) {
 }
 
 }  // namespace
+
+namespace {
+
+// `s2kf track REC --static STATIC`: the subject is calibrated on the static trial first, written
+// as PREFIX_subject.json, and is the one `s2kf calibrate STATIC --static` writes; the recording is
+// then tracked with it as with --subject (the same accuracy against the truth). Combinations that
+// cannot work and a missing static trial are refused by name and leave no output.
+TEST(CalibrateCommand, TrackWithAStaticTrialCalibratesOnItFirst) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "track_static";
+  fs::create_directories(dir);
+  const std::string static_trial = (dir / "static.c3d").string(), walk = (dir / "walk").string();
+  for (const std::string& command :
+       {"simulate --motion static --seed 4 --out " + static_trial,
+        "simulate --motion walk --seed 4 --frames 200 --out " + walk + ".c3d",
+        "calibrate " + static_trial + " --static --quiet --out " + (dir / "subject.json").string()}) {
+    const auto [status, output] = test_support::run_command(command);
+    ASSERT_EQ(status, 0) << command << "\n" << output;
+  }
+  const std::string common = " --truth " + walk + "_truth.csv --formats csv --quiet --out ";
+  const auto [one, one_output] = test_support::run_command("track " + walk + ".c3d --static " + static_trial +
+                                                           common + (dir / "one").string());
+  ASSERT_EQ(one, 0) << one_output;
+  const auto [two, two_output] =
+      test_support::run_command("track " + walk + ".c3d --subject " + (dir / "subject.json").string() +
+                                common + (dir / "two").string());
+  ASSERT_EQ(two, 0) << two_output;
+  const body::MarkerSet written = cli::load_marker_set(dir / "one_subject.json");
+  const body::MarkerSet calibrated = cli::load_marker_set(dir / "subject.json");
+  ASSERT_EQ(written.entries.size(), calibrated.entries.size());
+  for (std::size_t m = 0; m < written.entries.size(); ++m)
+    EXPECT_LT((written.entries[m].offset - calibrated.entries[m].offset).norm(), 1e-9) << m;
+  const auto truth_of = [&](const std::string& prefix) {
+    std::ifstream summary((dir / (prefix + ".json")).string());
+    return nlohmann::json::parse(summary)["truth"];
+  };
+  EXPECT_DOUBLE_EQ(truth_of("one")["segment_orientation_rms_deg"].get<double>(),
+                   truth_of("two")["segment_orientation_rms_deg"].get<double>());
+
+  const auto refused = [&](const std::string& options, const std::string& prefix) {
+    const auto [status, output] = test_support::run_command("track " + walk + ".c3d " + options +
+                                                            " --quiet --out " + (dir / prefix).string());
+    EXPECT_NE(status, 0) << options;
+    EXPECT_NE(output.find("--static"), std::string::npos) << output;
+    EXPECT_FALSE(fs::exists(dir / (prefix + ".json"))) << options;
+    EXPECT_FALSE(fs::exists(dir / (prefix + "_subject.json"))) << options;
+  };
+  refused("--static " + static_trial + " --subject " + (dir / "subject.json").string(), "both");
+  refused("--static " + static_trial + " --no-calibrate", "uncalibrated");
+  refused("--static " + (dir / "missing.c3d").string(), "missing");
+}
+
+}  // namespace

@@ -1,0 +1,65 @@
+// A subject estimated from one recording (calibrated_subject.hpp).
+#include "calibrated_subject.hpp"
+
+#include <s2kf/core/constants.hpp>
+
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace s2kf::cli {
+namespace {
+
+std::string fixed(double value, int precision) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << value;
+  return s.str();
+}
+
+}  // namespace
+
+CalibratedSubject calibrate_subject(FrameSource& source, const std::string& input,
+                                    const SubjectSettings& settings, const SampleSet& samples,
+                                    const std::string& name) {
+  CalibratedSubject result;
+  result.choice = choose_marker_set_for(source.labels(), settings.markerset, "");
+  track::SessionOptions options;
+  options.height_mm = settings.height_mm;
+  options.fallback_height_mm = 0;  // a subject file needs a real height: refuse instead
+  options.calibrate = true;
+  options.calibration_may_fail = false;
+  options.calibration_frames = settings.frames;
+  options.calibration.iterations = settings.iterations;
+  options.calibration.final_pass = true;
+  options.calibration.threads = settings.threads;
+  options.calibration.estimate_segment_scales = !settings.no_scales;
+  options.calibration.weak_direction_shrink = settings.shrink;
+  options.noise_from_calibration = settings.noise_from_calibration;
+  if (settings.static_pose)
+    options.calibration.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
+  try {
+    result.session = track::prepare_session(source, result.choice.set, options, samples);
+  } catch (const std::invalid_argument& e) {
+    throw UserError(input + ": " + e.what());
+  }
+  const track::SubjectCalibration& calibration = *result.session.calibration;
+  result.subject = subject_marker_set(result.choice.set, calibration.model, calibration.segment_scale,
+                                      result.session.tracker.marker_noise_mm_per_marker, name);
+  result.messages = marker_set_messages(result.choice, result.session.mapping);
+  return result;
+}
+
+nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::string& input) {
+  nlohmann::json document = marker_set_to_json(calibrated.subject);
+  const track::SubjectCalibration& calibration = *calibrated.session.calibration;
+  // The loader rejects unknown keys, so the subject file carries only a one-line summary of the
+  // calibration in its description.
+  document["description"] = calibrated.subject.description + " on " +
+                            std::filesystem::path(input).filename().string() + "; mean marker distance " +
+                            fixed(calibration.mean_marker_distance_before_mm, 1) + " mm before, " +
+                            fixed(calibration.mean_marker_distance_after_mm, 1) + " mm after";
+  return document;
+}
+
+}  // namespace s2kf::cli

@@ -1,0 +1,52 @@
+/// @file
+/// A subject estimated from one recording, as `s2kf calibrate` estimates it and as `s2kf track
+/// --static` does before tracking: the session with its calibration, and the calibrated subject as
+/// the marker set a subject file holds.
+#pragma once
+
+#include "marker_set_json.hpp"
+
+#include <s2kf/core/sample_set.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/track/session.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace s2kf::cli {
+
+/// The options of `s2kf calibrate` (and of `s2kf track --static`, which calibrates in the zero pose).
+struct SubjectSettings {
+  std::string markerset;  ///< empty: the bundled set that matches best
+  double height_mm = 0;   ///< 0: estimate
+  int iterations = 1;
+  long frames = 1200;
+  bool no_scales = false;
+  double shrink = track::CalibrationOptions{}.weak_direction_shrink;
+  bool noise_from_calibration = true;
+  bool static_pose = false;  ///< a static trial in the model's zero pose
+  double static_sd_deg = 3.0;
+  int threads = 1;
+};
+
+struct CalibratedSubject {
+  MarkerSetChoice choice;
+  track::Session session;  ///< with its calibration
+  body::MarkerSet subject;
+  std::vector<std::string> messages;  ///< which marker set and why, labels ignored
+};
+
+/// Calibrates the subject of the recording `source` (`input` names it in messages), with the
+/// tracker's `samples`; the subject is named `name`. Throws UserError naming the recording when
+/// the calibration cannot run (no height, too few markers).
+CalibratedSubject calibrate_subject(FrameSource& source, const std::string& input,
+                                    const SubjectSettings& settings, const SampleSet& samples,
+                                    const std::string& name);
+
+/// The subject file's document: the marker set, described with the recording it came from and
+/// the calibration's mean marker distance before and after.
+nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::string& input);
+
+}  // namespace s2kf::cli
