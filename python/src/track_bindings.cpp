@@ -8,6 +8,8 @@
 #include "streaming_tracker.hpp"
 #include "track_pipeline.hpp"
 
+#include "calibrated_subject.hpp"  // examples/s2kf: the calibration `s2kf calibrate` runs
+
 #include "command.hpp"  // examples/s2kf: the program's error type, cli::UserError
 
 #include <s2kf/core/sample_cache.hpp>
@@ -22,12 +24,14 @@
 #include <pybind11/stl.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace s2kf::python {
@@ -147,6 +151,32 @@ std::unique_ptr<TrackResult> track(const py::object& recording, const py::object
   } catch (const cli::UserError& e) {
     raise_user_error(e.what());
   }
+}
+
+/// s2kf.calibrate: `s2kf calibrate` without its report and .osim file: the calibrated subject as
+/// the document a subject file holds (a dict), also written to `out` when given.
+py::object calibrate(const py::object& recording, const py::object& out,
+                     const cli::SubjectSettings& settings) {
+  const py::object fspath = py::module_::import("os").attr("fspath");
+  const std::string path = py::str(fspath(recording));
+  const std::string out_path = out.is_none() ? std::string() : std::string(py::str(fspath(out)));
+  const std::string name =
+      out_path.empty() ? fs::path(path).stem().string() + "_subject" : fs::path(out_path).stem().string();
+  nlohmann::json document;
+  try {
+    if (!fs::exists(path)) raise_user_error(path + ": no such file (it does not exist)");
+    py::gil_scoped_release unlocked;
+    c3d::C3dFrameSource source(path);
+    const cli::CalibratedSubject calibrated = cli::calibrate_subject(
+        source, path, settings, lcd_sample_set(6 + body::kJointCount, track::TrackerOptions{}.samples).set,
+        name);
+    document = cli::subject_document(calibrated, path);
+    if (!out_path.empty())
+      io::write_file_atomically(out_path, [&](std::ostream& file) { file << document.dump(2) << "\n"; });
+  } catch (const cli::UserError& e) {
+    raise_user_error(e.what());
+  }
+  return py::module_::import("json").attr("loads")(document.dump());
 }
 
 /// A view of column `first`..`first + count` of the run's motion table (frames x columns,
@@ -331,6 +361,35 @@ void bind_track(py::module_& module) {
       "uniform_noise: every marker the same noise (else each its calibration residual's); smooth: "
       "RTS smoothing; height_mm: 0 estimates it; model_output: (P,) bool, points that are not markers. "
       "Runs without the GIL. Returns a TrackResult.");
+
+  module.def(
+      "calibrate",
+      [](const py::object& recording, const py::object& out, bool static_pose, double static_sd,
+         const py::object& markerset, double height_mm, std::int64_t frames, bool uniform_noise) {
+        cli::SubjectSettings settings;
+        settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();
+        if (height_mm != 0 && !(height_mm >= 300 && height_mm <= 3000))
+          throw py::value_error("height_mm must lie between 300 and 3000 (or be 0: estimated), got " +
+                                number_text(height_mm));
+        if (frames < 10) throw py::value_error("frames must be at least 10");
+        if (!(static_sd >= 0.1 && static_sd <= 90.0))
+          throw py::value_error("static_sd must lie between 0.1 and 90 degrees");
+        settings.height_mm = height_mm;
+        settings.frames = static_cast<long>(frames);
+        settings.noise_from_calibration = !uniform_noise;
+        settings.static_pose = static_pose;
+        settings.static_sd_deg = static_sd;
+        settings.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+        return calibrate(recording, out, settings);
+      },
+      py::arg("recording"), py::kw_only(), py::arg("out") = py::none(), py::arg("static") = false,
+      py::arg("static_sd") = 3.0, py::arg("markerset") = py::none(), py::arg("height_mm") = 0.0,
+      py::arg("frames") = 1200, py::arg("uniform_noise") = false,
+      "Estimates a subject's marker offsets and bone lengths from a C3D recording as `s2kf calibrate` does "
+      "and returns the subject file's document (a dict); out: also write it there (for track(subject=...) "
+      "or `s2kf track --subject`). static: the recording is a static trial in the model's zero pose "
+      "(static_sd: each joint's SD from it, degrees); markerset: as in track; frames: frames used at "
+      "most; uniform_noise: write no per-marker noise. Runs without the GIL.");
 }
 
 }  // namespace s2kf::python

@@ -160,3 +160,23 @@ def test_a_static_trial_calibrates_the_subject_first(cli, tmp_path):
         s2kf.track(str(walk), static=str(tmp_path / "missing.c3d"))
     with pytest.raises(ValueError, match="static_sd must lie between"):
         s2kf.track(str(walk), static=str(static), static_sd=0)
+
+
+def test_calibrate_writes_the_subject_file_the_program_writes(cli, tmp_path):
+    """s2kf.calibrate is `s2kf calibrate`: the same subject file (but for its name), also returned."""
+    static = tmp_path / "static.c3d"
+    cli("simulate", "--motion", "static", "--seed", "6", "--out", static)
+    cli("calibrate", static, "--static", "--quiet", "--out", tmp_path / "cli.json")
+    subject = s2kf.calibrate(static, static=True, out=tmp_path / "py.json")
+    written = json.loads((tmp_path / "py.json").read_text())
+    program = json.loads((tmp_path / "cli.json").read_text())
+    assert subject == written
+    assert written.pop("name") == "py" and program.pop("name") == "cli"
+    assert written == program
+    free = s2kf.calibrate(static)  # without the posture: other offsets
+    assert max(max(abs(a - b) for a, b in zip(m["offset"], n["offset"]))
+               for m, n in zip(free["markers"], subject["markers"])) > 1.0
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        s2kf.calibrate(tmp_path / "missing.c3d")
+    with pytest.raises(ValueError, match="static_sd must lie between"):
+        s2kf.calibrate(static, static=True, static_sd=100)
