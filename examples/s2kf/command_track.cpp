@@ -112,7 +112,14 @@ void run_track(const TrackSettings& given) {
     const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
     TrackSettings one = settings;  // one recording: its calibration may take every core
     one.calibration_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    const TrackOutcome outcome = track_file(todo[0].input, prefixes[0], one, terminal);
+    TrackOutcome outcome;
+    try {
+      outcome = track_file(todo[0].input, prefixes[0], one, terminal);
+    } catch (...) {
+      // The run wrote nothing of the recording's: the subject file --static wrote for it goes too.
+      if (!settings.static_trial.empty()) fs::remove(settings.subject);
+      throw;
+    }
     if (!settings.quiet) std::cout << outcome.paragraph << "\n";
     return;
   }

@@ -194,6 +194,15 @@ TEST(CalibrateCommand, TrackWithAStaticTrialCalibratesOnItFirst) {
   refused("--static " + static_trial + " --subject " + (dir / "subject.json").string(), "both");
   refused("--static " + static_trial + " --no-calibrate", "uncalibrated");
   refused("--static " + (dir / "missing.c3d").string(), "missing");
+  // A recording that fails after the static trial was calibrated leaves no subject file either.
+  const std::string empty = (dir / "empty.c3d").string();
+  std::ofstream(empty).close();
+  const auto [failed, failed_output] = test_support::run_command(
+      "track " + empty + " --static " + static_trial + " --quiet --out " + (dir / "failed").string());
+  EXPECT_NE(failed, 0);
+  EXPECT_NE(failed_output.find("empty"), std::string::npos) << failed_output;
+  EXPECT_FALSE(fs::exists(dir / "failed_subject.json"));
+  EXPECT_FALSE(fs::exists(dir / "failed.json"));
 }
 
 }  // namespace
