@@ -101,7 +101,8 @@ struct UpdateOptions {
   /// that noise moves the state steadily. With the lists, the update takes the cross-covariance of
   /// the unread states u as their prior regression on the read states o, P_uo P_oo^-1 Cov(x_o, y),
   /// which is exact for a model that reads only x_o: in the whitened coordinates, the regression
-  /// projected onto the read states' span. Both gains; read during update() only.
+  /// projected onto the read states' span. Both gains (not the iterated update, which the tracker
+  /// runs only in its first frames); read during update() only.
   const std::vector<std::vector<int>>* block_dependencies = nullptr;
 };
 
