@@ -23,16 +23,16 @@ struct TrackSettings {
   std::string motion_model;               // empty: the preset's
   std::string gain = "information-form";  // square-root, information-form-root-products (TrackerOptions)
   std::string method = "s2kf";
-  std::string markerset;  // empty: the bundled set that matches best
-  std::string subject;    // a calibrated subject file (s2kf calibrate)
+  std::string markerset;       // empty: the bundled set that matches best
+  std::string subject;         // a calibrated subject file (s2kf calibrate)
   std::string static_trial;    // a static trial: the subject is calibrated on it first (--static)
   double static_sd_deg = 3.0;  // --static-sd
-  bool calibrate = true;  // calibrate the subject on the recording first (not with --subject)
+  bool calibrate = true;       // calibrate the subject on the recording first (not with --subject)
   int calibration_frames = 1200;
   double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
   bool noise_from_calibration = true;  // false: --uniform-noise
-  int calibration_samples = 0;  // the calibration's tracking pass; 0: the tracker's samples
-  int calibration_threads = 1;  // set by run_track: every core for one recording, 1 in a batch
+  int calibration_samples = 0;         // the calibration's tracking pass; 0: the tracker's samples
+  int calibration_threads = 1;         // set by run_track: every core for one recording, 1 in a batch
   bool smooth = false;
   long figure_frame = -1;  // >= 0: draw this frame
   std::string truth;       // a ground-truth motion CSV (simulated recordings): accuracy in the summary

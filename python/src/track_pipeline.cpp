@@ -2,8 +2,8 @@
 #include "track_pipeline.hpp"
 
 #include "calibrated_subject.hpp"  // examples/s2kf: a subject calibrated on a static trial
-#include "marker_set_json.hpp"  // examples/s2kf: bundled marker sets, the automatic choice, messages
-#include "track_summary.hpp"    // examples/s2kf: the summary `s2kf track` writes
+#include "marker_set_json.hpp"     // examples/s2kf: bundled marker sets, the automatic choice, messages
+#include "track_summary.hpp"       // examples/s2kf: the summary `s2kf track` writes
 
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>

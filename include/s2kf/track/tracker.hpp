@@ -189,9 +189,9 @@ class Tracker {
   /// The state's orientation error (3-5): every body part hangs from it, so the second order of
   /// its error is the nonlinearity the parts share (UpdateOptions::information_quadratic_states).
   std::vector<int> root_orientation_states_ = {3, 4, 5};
-  GaussianXd state_;                     ///< the pose posterior (what the update works on)
-  GaussianXd motion_;                    ///< constant velocity: [pose, rates]; its pose part
-                                         ///< equals state_ between frames
+  GaussianXd state_;   ///< the pose posterior (what the update works on)
+  GaussianXd motion_;  ///< constant velocity: [pose, rates]; its pose part
+                       ///< equals state_ between frames
   MarginalUpdate marginal_update_;
   Eigen::Matrix3d reference_rotation_ = Eigen::Matrix3d::Identity();
   Eigen::MatrixXd process_noise_, transition_, noise_;
