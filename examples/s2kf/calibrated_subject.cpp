@@ -1,23 +1,19 @@
 // A subject estimated from one recording (calibrated_subject.hpp).
 #include "calibrated_subject.hpp"
 
-#include <s2kf/core/constants.hpp>
+#include "track_summary.hpp"  // fixed_text
 
+#include <s2kf/core/constants.hpp>
+#include <s2kf/io/atomic_file.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
+
+#include <algorithm>
 #include <filesystem>
-#include <iomanip>
-#include <sstream>
+#include <memory>
 #include <stdexcept>
+#include <thread>
 
 namespace s2kf::cli {
-namespace {
-
-std::string fixed(double value, int precision) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(precision) << value;
-  return s.str();
-}
-
-}  // namespace
 
 CalibratedSubject calibrate_subject(FrameSource& source, const std::string& input,
                                     const SubjectSettings& settings, const SampleSet& samples,
@@ -50,6 +46,34 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
   return result;
 }
 
+CalibratedSubject calibrate_subject_file(const std::string& path, const std::string& what,
+                                         const SubjectSettings& settings, const SampleSet& samples,
+                                         const std::string& name) {
+  std::unique_ptr<c3d::C3dFrameSource> source;
+  try {
+    source = std::make_unique<c3d::C3dFrameSource>(path);
+  } catch (const std::exception& e) {
+    throw UserError(what.empty() ? std::string(e.what()) : what + ": " + e.what());
+  }
+  return calibrate_subject(*source, what.empty() ? path : what + " " + path, settings, samples, name);
+}
+
+SubjectSettings static_trial_settings(const std::string& markerset, double height_mm,
+                                      bool noise_from_calibration, double static_sd_deg) {
+  SubjectSettings settings;
+  settings.markerset = markerset;
+  settings.height_mm = height_mm;
+  settings.noise_from_calibration = noise_from_calibration;
+  settings.static_pose = true;
+  settings.static_sd_deg = static_sd_deg;
+  settings.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return settings;
+}
+
+void write_subject_file(const std::string& path, const nlohmann::json& document) {
+  io::write_file_atomically(path, [&](std::ostream& out) { out << document.dump(2) << "\n"; });
+}
+
 nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::string& input) {
   nlohmann::json document = marker_set_to_json(calibrated.subject);
   const track::SubjectCalibration& calibration = *calibrated.session.calibration;
@@ -57,8 +81,8 @@ nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::
   // calibration in its description.
   document["description"] = calibrated.subject.description + " on " +
                             std::filesystem::path(input).filename().string() + "; mean marker distance " +
-                            fixed(calibration.mean_marker_distance_before_mm, 1) + " mm before, " +
-                            fixed(calibration.mean_marker_distance_after_mm, 1) + " mm after";
+                            fixed_text(calibration.mean_marker_distance_before_mm, 1) + " mm before, " +
+                            fixed_text(calibration.mean_marker_distance_after_mm, 1) + " mm after";
   return document;
 }
 

@@ -45,8 +45,22 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
                                     const SubjectSettings& settings, const SampleSet& samples,
                                     const std::string& name);
 
+/// calibrate_subject on the C3D file `path`. A file the reader refuses is a UserError: its
+/// sentence, after "`what`: " when `what` (the option that named the file) is given.
+CalibratedSubject calibrate_subject_file(const std::string& path, const std::string& what,
+                                         const SubjectSettings& settings, const SampleSet& samples,
+                                         const std::string& name);
+
+/// The settings of a static trial's calibration in the model's zero pose, with every core (`s2kf
+/// track --static`, `s2kf.track(static=...)`).
+SubjectSettings static_trial_settings(const std::string& markerset, double height_mm,
+                                      bool noise_from_calibration, double static_sd_deg);
+
 /// The subject file's document: the marker set, described with the recording it came from and
 /// the calibration's mean marker distance before and after.
 nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::string& input);
+
+/// Writes a subject file's document to `path`, completely or not at all.
+void write_subject_file(const std::string& path, const nlohmann::json& document);
 
 }  // namespace s2kf::cli

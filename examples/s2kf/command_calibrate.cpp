@@ -7,9 +7,7 @@
 #include "tracker_samples.hpp"
 
 #include <s2kf/body/body_model.hpp>
-#include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
-#include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/track/session.hpp>
 
 #include <nlohmann/json.hpp>
@@ -41,16 +39,10 @@ std::string fixed(double value, int precision) {
 }
 
 void run_calibrate(CalibrateSettings settings) {
-  std::unique_ptr<c3d::C3dFrameSource> source;
-  try {
-    source = std::make_unique<c3d::C3dFrameSource>(settings.input);
-  } catch (const std::exception& e) {
-    throw UserError(e.what());
-  }
   settings.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const std::string name = fs::path(settings.out).stem().string();
-  const CalibratedSubject calibrated = calibrate_subject(
-      *source, settings.input, settings, cached_sample_set(46, track::TrackerOptions{}.samples), name);
+  const CalibratedSubject calibrated = calibrate_subject_file(
+      settings.input, "", settings, cached_sample_set(46, track::TrackerOptions{}.samples), name);
   const track::Session& session = calibrated.session;
   const track::SubjectCalibration& calibration = *session.calibration;
   const double height = session.height_mm;
@@ -68,7 +60,7 @@ void run_calibrate(CalibrateSettings settings) {
   if (fs::path(settings.out).has_parent_path()) fs::create_directories(fs::path(settings.out).parent_path());
   const auto osim =
       prepare_subject_opensim_model(settings.out, calibration.model, session.mapping);  // SUBJECT.osim
-  io::write_file_atomically(settings.out, [&](std::ostream& out) { out << document.dump(2) << "\n"; });
+  write_subject_file(settings.out, document);
   osim->commit();
   fs::path report = settings.out;
   report.replace_extension();

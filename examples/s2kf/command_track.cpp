@@ -10,11 +10,6 @@
 #include "track_summary.hpp"
 #include "tracker_samples.hpp"
 
-#include <s2kf/io/atomic_file.hpp>
-#include <s2kf/io/c3d_frame_source.hpp>
-
-#include <nlohmann/json.hpp>
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -34,26 +29,14 @@ namespace fs = std::filesystem;
 /// calibrate STATIC --static` does), written to `path` as a subject file before any recording is
 /// tracked with it.
 void calibrate_on_static_trial(const TrackSettings& settings, const std::string& path) {
-  std::unique_ptr<c3d::C3dFrameSource> source;
-  try {
-    source = std::make_unique<c3d::C3dFrameSource>(settings.static_trial);
-  } catch (const std::exception& e) {
-    throw UserError(std::string("--static: ") + e.what());
-  }
-  SubjectSettings subject;
-  subject.markerset = settings.markerset;
-  subject.height_mm = settings.height_mm;
-  subject.noise_from_calibration = settings.noise_from_calibration;
-  subject.static_pose = true;
-  subject.static_sd_deg = settings.static_sd_deg;
-  subject.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const int samples = settings.samples > 0 ? settings.samples : track::TrackerOptions{}.samples;
   const CalibratedSubject calibrated =
-      calibrate_subject(*source, "--static " + settings.static_trial, subject, cached_sample_set(46, samples),
-                        fs::path(path).stem().string());
+      calibrate_subject_file(settings.static_trial, "--static",
+                             static_trial_settings(settings.markerset, settings.height_mm,
+                                                   settings.noise_from_calibration, settings.static_sd_deg),
+                             cached_sample_set(46, samples), fs::path(path).stem().string());
   if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
-  const nlohmann::json document = subject_document(calibrated, settings.static_trial);
-  io::write_file_atomically(path, [&](std::ostream& out) { out << document.dump(2) << "\n"; });
+  write_subject_file(path, subject_document(calibrated, settings.static_trial));
   if (settings.quiet) return;
   const track::SubjectCalibration& calibration = *calibrated.session.calibration;
   std::cout << fs::path(settings.static_trial).filename().string() << " (static trial): mean marker distance "

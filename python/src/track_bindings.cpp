@@ -76,6 +76,12 @@ class ArrayFrameSource : public FrameSource {
   throw py::error_already_set();
 }
 
+/// The range `--static-sd` takes, as ValueError.
+void check_static_sd(double static_sd) {
+  if (!(static_sd >= 0.1 && static_sd <= 90.0))
+    throw py::value_error("static_sd must lie between 0.1 and 90 degrees");
+}
+
 /// The CLI's checks on the settings (its option ranges), as ValueError.
 void check_settings(const TrackSettings& settings) {
   if (settings.samples < 3 || settings.samples > 100001)
@@ -166,13 +172,10 @@ py::object calibrate(const py::object& recording, const py::object& out,
   try {
     if (!fs::exists(path)) raise_user_error(path + ": no such file (it does not exist)");
     py::gil_scoped_release unlocked;
-    c3d::C3dFrameSource source(path);
-    const cli::CalibratedSubject calibrated = cli::calibrate_subject(
-        source, path, settings, lcd_sample_set(6 + body::kJointCount, track::TrackerOptions{}.samples).set,
-        name);
+    const cli::CalibratedSubject calibrated = cli::calibrate_subject_file(
+        path, "", settings, lcd_sample_set(6 + body::kJointCount, track::TrackerOptions{}.samples).set, name);
     document = cli::subject_document(calibrated, path);
-    if (!out_path.empty())
-      io::write_file_atomically(out_path, [&](std::ostream& file) { file << document.dump(2) << "\n"; });
+    if (!out_path.empty()) cli::write_subject_file(out_path, document);
   } catch (const cli::UserError& e) {
     raise_user_error(e.what());
   }
@@ -330,8 +333,7 @@ void bind_track(py::module_& module) {
         settings.subject = subject.is_none() ? std::string() : py::str(subject).cast<std::string>();
         settings.static_trial =
             static_trial.is_none() ? std::string() : py::str(static_trial).cast<std::string>();
-        if (!(static_sd >= 0.1 && static_sd <= 90.0))
-          throw py::value_error("static_sd must lie between 0.1 and 90 degrees");
+        check_static_sd(static_sd);
         settings.static_sd_deg = static_sd;
         settings.calibrate = calibrate;
         settings.calibration_frames = calibration_frames;
@@ -372,8 +374,7 @@ void bind_track(py::module_& module) {
           throw py::value_error("height_mm must lie between 300 and 3000 (or be 0: estimated), got " +
                                 number_text(height_mm));
         if (frames < 10) throw py::value_error("frames must be at least 10");
-        if (!(static_sd >= 0.1 && static_sd <= 90.0))
-          throw py::value_error("static_sd must lie between 0.1 and 90 degrees");
+        check_static_sd(static_sd);
         settings.height_mm = height_mm;
         settings.frames = static_cast<long>(frames);
         settings.noise_from_calibration = !uniform_noise;

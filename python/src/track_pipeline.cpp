@@ -6,13 +6,10 @@
 #include "track_summary.hpp"       // examples/s2kf: the summary `s2kf track` writes
 
 #include <s2kf/core/sample_cache.hpp>
-#include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
 
-#include <algorithm>
 #include <memory>
 #include <stdexcept>
-#include <thread>
 
 namespace s2kf::python {
 namespace {
@@ -49,21 +46,11 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   if (!settings.static_trial.empty()) {
     // As `s2kf track --static`: the subject calibrated on the static trial in the model's zero
     // pose (`s2kf calibrate --static`), then the recording tracked with it as with a subject file.
-    std::unique_ptr<c3d::C3dFrameSource> static_source;
-    try {
-      static_source = std::make_unique<c3d::C3dFrameSource>(settings.static_trial);
-    } catch (const std::exception& e) {
-      throw cli::UserError(std::string("static: ") + e.what());
-    }
-    cli::SubjectSettings subject;
-    subject.markerset = settings.markerset;
-    subject.height_mm = settings.height_mm;
-    subject.noise_from_calibration = !settings.uniform_noise;
-    subject.static_pose = true;
-    subject.static_sd_deg = settings.static_sd_deg;
-    subject.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    const cli::CalibratedSubject calibrated = cli::calibrate_subject(
-        *static_source, "static " + settings.static_trial, subject, result->samples, name + "_subject");
+    const cli::CalibratedSubject calibrated = cli::calibrate_subject_file(
+        settings.static_trial, "static",
+        cli::static_trial_settings(settings.markerset, settings.height_mm, !settings.uniform_noise,
+                                   settings.static_sd_deg),
+        result->samples, name + "_subject");
     choice.set = calibrated.subject;
     choice.source = "calibrated on the static trial " + settings.static_trial;
   } else {
