@@ -53,6 +53,7 @@ for occluded in modes:
                         "true_subject_reference": summary["true_subject_reference"],
                         "identifiable_subject_reference": summary.get("identifiable_subject_reference"),
                         "tracker_model_reference": summary.get("tracker_model_reference"),
+                        "true_subject_tracking_reference": summary.get("true_subject_tracking_reference"),
                         "constant_placement_reference": summary.get("constant_placement_reference"),
                         "calibration_at_true_poses_reference": summary.get("calibration_at_true_poses_reference")})
             if "error_by_time_hidden" in summary:

@@ -219,6 +219,7 @@ void run_evaluate(const EvaluateSettings& settings) {
 
   // The reachable reference (simulated input only) and the smoothed S2KF, against the truth.
   std::optional<track::TruthComparison> reference, smoothed, model_fit;
+  json true_subject_tracking = nullptr;
   json constant_placement = nullptr, at_true_poses = nullptr;
   json identifiable = json::array();
   // How the segments' error grows with the time their markers have been hidden (the input's own
@@ -229,6 +230,14 @@ void run_evaluate(const EvaluateSettings& settings) {
                                                      setup.mapping, setup.rate_hz, settings.warmup));
   };
   if (truth) error_by_time_hidden = {{"s2kf", hidden_time(s2kf.run.motion)}};
+  // The RTS-smoothed motion of a session over the whole recording.
+  const auto smoothed_motion = [&](const track::Session& session) {
+    SequenceFrameSource source(complete);
+    track::RunOptions run_options;
+    run_options.smooth = true;
+    return track::run_session(session, source, cached_sample_set(46, session.tracker.samples), run_options)
+        .motion;
+  };
   if (simulated) {
     reference = track::compare_with_truth(setup.model,
                                           track::true_subject_fit(simulated->subject, simulated->recording),
@@ -252,6 +261,18 @@ void run_evaluate(const EvaluateSettings& settings) {
                                             *truth, settings.warmup);
       say("tracker-model fit: segment orientation RMS " + cell(model_fit->segment_orientation_rms_deg) +
           " deg");
+      // The tracker itself with the subject the simulation drew: what a perfect calibration would
+      // give this filter (and its smoother), so the loss splits into calibration and filtering.
+      track::Session true_setup = setup;
+      true_setup.model = simulated->subject.model;
+      const track::MethodResult with_true_subject = track::evaluate_method(
+          true_setup, complete, track::Method::s2kf, main_samples, truth_ptr, settings.warmup);
+      true_subject_tracking = {{"s2kf", truth_json(*with_true_subject.truth)}};
+      if (settings.smooth)
+        true_subject_tracking["s2kf_smoothed"] = truth_json(
+            track::compare_with_truth(setup.model, smoothed_motion(true_setup), *truth, settings.warmup));
+      say("S2KF with the true subject: segment orientation RMS " +
+          cell(true_subject_tracking["s2kf"]["segment_orientation_rms_deg"].get<double>()) + " deg");
     }
     for (const json& r : identifiable)
       say("identifiable-subject fit (prior-only fraction " + r["prior_only_fraction"].dump() + ", " +
@@ -259,13 +280,9 @@ void run_evaluate(const EvaluateSettings& settings) {
           cell(r["truth"]["segment_orientation_rms_deg"].get<double>()) + " deg");
   }
   if (settings.smooth && truth) {
-    SequenceFrameSource source(complete);
-    track::RunOptions run_options;
-    run_options.smooth = true;
-    const track::TrackingRun run =
-        track::run_session(setup, source, cached_sample_set(46, setup.tracker.samples), run_options);
-    smoothed = track::compare_with_truth(setup.model, run.motion, *truth, settings.warmup);
-    error_by_time_hidden["s2kf_smoothed"] = hidden_time(run.motion);
+    const io::MotionTable motion = smoothed_motion(setup);
+    smoothed = track::compare_with_truth(setup.model, motion, *truth, settings.warmup);
+    error_by_time_hidden["s2kf_smoothed"] = hidden_time(motion);
     say("smoothed S2KF: segment orientation RMS " + cell(smoothed->segment_orientation_rms_deg) + " deg");
   }
 
@@ -348,6 +365,7 @@ void run_evaluate(const EvaluateSettings& settings) {
                   {"true_subject_reference", reference ? truth_json(*reference) : json(nullptr)},
                   {"identifiable_subject_reference", simulated ? identifiable : json(nullptr)},
                   {"tracker_model_reference", model_fit ? truth_json(*model_fit) : json(nullptr)},
+                  {"true_subject_tracking_reference", true_subject_tracking},
                   {"constant_placement_reference", constant_placement},
                   {"calibration_at_true_poses_reference", at_true_poses},
                   {"s2kf_smoothed", smoothed ? truth_json(*smoothed) : json(nullptr)},
