@@ -19,7 +19,8 @@
 // surviving share), SHRINK (weak_direction_shrink), SEGMENTS
 // (per segment), DIRECTIONS (the directions left to the prior), SUBJECT (the calibrated and the
 // nominal subject's offset and bone-length errors against the true subject), SOFT_TISSUE (the
-// subject's soft-tissue scale, mm).
+// subject's soft-tissue scale, mm), FLEXION_SPEED (the limbs' flexion joints' random-walk speed;
+// JOINT_SPEED above is every other joint's).
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -56,6 +57,7 @@ int main(int argc, char** argv) {
   if (const char* v = std::getenv("PRIOR_ONLY")) opt.calibration.prior_only_fraction = std::atof(v);
   if (std::getenv("PRIOR_SHARE")) opt.calibration.prior_only_share = true;
   if (const char* v = std::getenv("SHRINK")) opt.calibration.weak_direction_shrink = std::atof(v);
+  if (const char* v = std::getenv("FLEXION_SPEED")) opt.tracker.flexion_speed_per_s = std::atof(v);
   std::string model = argv[6];
   opt.tracker.motion_model =
       model == "cv" ? track::MotionModel::constant_velocity : track::MotionModel::random_walk;

@@ -41,7 +41,7 @@ TEST(SimulateCommand, ListNamesTheBundledMotions) {
   const CommandResult run = run_cli("simulate --list");
   ASSERT_EQ(run.status, 0) << run.output;
   for (const char* name : {"handstand", "walk", "squats", "jumping_jacks", "arm_circles", "cartwheel",
-                           "forward_roll", "random_sweep", "static"})
+                           "forward_roll", "random_sweep", "static", "dance"})
     EXPECT_NE(run.output.find(name), std::string::npos) << name << " missing from:\n" << run.output;
 }
 

@@ -9,8 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -185,7 +187,7 @@ TEST(Recording, HiddenMarkersAreNaNAndPlannedLossesHideWhatTheySay) {
 TEST(BundledMotions, StayWithinTheJointLimitsAtEveryFrameAndMovePlausibly) {
   const cli::JointTable joints = model_joints();
   for (const char* name : {"handstand", "walk", "squats", "jumping_jacks", "arm_circles", "cartwheel",
-                           "forward_roll", "random_sweep", "static"}) {
+                           "forward_roll", "random_sweep", "static", "dance"}) {
     const KeyframeMotion motion = bundled_motion(name);
     const InterpolatedMotion trajectory(motion);
     double fastest_joint = 0, fastest_root = 0;
@@ -207,6 +209,25 @@ TEST(BundledMotions, StayWithinTheJointLimitsAtEveryFrameAndMovePlausibly) {
   const KeyframeMotion handstand = bundled_motion("handstand");
   EXPECT_EQ(static_cast<long>(std::floor((handstand.end_time() - handstand.start_time()) * 100 + 1e-9)) + 1,
             675);
+}
+
+// The dance is the bundled motion whose axial rotations move (the others keep them at 0): every
+// twist of the trunk, the humeri, the forearms and the hips sweeps tens of degrees.
+TEST(BundledMotions, TheDanceTurnsEveryTwist) {
+  const cli::JointTable joints = model_joints();
+  const KeyframeMotion motion = bundled_motion("dance");
+  const InterpolatedMotion trajectory(motion);
+  for (const auto& [name, least_range_deg] : std::vector<std::pair<std::string, double>>{
+           {"BTz", 20}, {"LSz", 60}, {"RSz", 60}, {"LEz", 100}, {"REz", 100}, {"LHz", 30}, {"RHz", 30}}) {
+    const auto j = std::find(joints.names.begin(), joints.names.end(), name) - joints.names.begin();
+    ASSERT_LT(j, static_cast<long>(joints.names.size())) << name;
+    double lowest = 1e9, highest = -1e9;
+    for (double t = motion.start_time(); t <= motion.end_time() + 1e-9; t += 0.01) {
+      const double angle = trajectory.at(t).joints(j);
+      lowest = std::min(lowest, angle), highest = std::max(highest, angle);
+    }
+    EXPECT_GT((highest - lowest) * 180 / 3.14159265358979, least_range_deg) << name;
+  }
 }
 
 TEST(MotionJson, RejectsUnknownJointsUnitsAndLimitViolations) {

@@ -25,6 +25,13 @@ enum class Axis : int { x = 0, y = 1, z = 2 };
 
 inline char axis_letter(Axis axis) { return "xyz"[static_cast<int>(axis)]; }
 
+/// Whether a joint is a limb's flexion/extension: the x axis of a shoulder, elbow, hip, knee or
+/// ankle of either side (LSx, REx, LKx, ...). These carry a limb's large, fast swings.
+inline bool is_limb_flexion(std::string_view joint_name) {
+  return joint_name.size() == 3 && joint_name[2] == 'x' && (joint_name[0] == 'L' || joint_name[0] == 'R') &&
+         std::string_view("SEHKA").find(joint_name[1]) != std::string_view::npos;
+}
+
 /// One rotational degree of freedom. Frames are numbered: frame 0 is the root (pelvis), frame j + 1
 /// is the frame after joint j's rotation. Joint j's frame is
 ///   F_{j+1} = F_{parent_frame} * Translation(translation) * Rotation(axis, q_j),

@@ -108,9 +108,7 @@ S2KF_INLINE TruthComparison compare_with_truth(const body::BodyModel& model, con
     if (rms > result.worst_joint_rms_deg)
       result.worst_joint_rms_deg = rms, result.worst_joint = model.joints[j].name;
     const std::string& name = model.joints[j].name;
-    const bool flexion = name.size() == 3 && name[2] == 'x' && (name[0] == 'L' || name[0] == 'R') &&
-                         std::string("SEHKA").find(name[1]) != std::string::npos;
-    if (flexion) limb_sq += joint_sq(j), limb_count += joint_n(j);
+    if (body::is_limb_flexion(name)) limb_sq += joint_sq(j), limb_count += joint_n(j);
   }
   result.limb_flexion_rms_deg = std::sqrt(limb_sq / limb_count) * degrees;
   for (int f : segment_frames)
