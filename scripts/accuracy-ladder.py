@@ -34,6 +34,8 @@ def nested(*keys):
 
 RUNGS = [
     ("tracker (S2KF, default options)", nested("s2kf", "truth")),
+    ("tracker with the true subject", nested("true_subject_tracking_reference", "s2kf")),
+    ("tracker with the true subject, smoothed", nested("true_subject_tracking_reference", "s2kf_smoothed")),
     ("fit with the tracker's calibrated model", nested("tracker_model_reference")),
     ("fit with the calibration's bundle adjustment started at the true poses",
      nested("calibration_at_true_poses_reference", "truth")),

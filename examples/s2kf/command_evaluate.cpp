@@ -42,7 +42,8 @@ const RegisterCommand evaluate_registration{
       app.add_option("--motion", settings->motion,
                      "simulate this bundled motion (or motion .json) on a realistic subject instead of "
                      "reading a recording; adds the references a known subject allows (true subject, "
-                     "identifiable subject, best constant placement, calibration at the true poses)");
+                     "identifiable subject, best constant placement, calibration at the true poses, "
+                     "the S2KF itself with the true subject)");
       app.add_option("--subject-seed", settings->subject_seed,
                      "seed of the simulated subject and its sensor noise (default 1)");
       app.add_option("--occlusion", settings->occlusion,

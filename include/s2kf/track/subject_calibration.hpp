@@ -303,9 +303,13 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const M
   // The pass takes the ordinary gain whatever the tracker's. Its poses start the bundle adjustment
   // and decide which residuals it leaves out, and the calibration is sensitive to them: with the
   // information form here the real test1 recording's subject came out tracking 7.2 mm instead of
-  // 4.6 (docs/benchmarks.md).
+  // 4.6 (docs/benchmarks.md). For the same reason every joint walks as loosely as the flexions, so
+  // the poses follow the markers closely: with the tracker's slower walk for the other joints the
+  // real test1 and HDM05 recordings' subjects came out tracking 6.0 and 14.4 mm instead of 4.4 and
+  // 10.9 (docs/tracking.md).
   TrackerOptions pass_options = tracker_options;
   pass_options.information_form_update = false;
+  pass_options.joint_speed_per_s = std::max(pass_options.joint_speed_per_s, pass_options.flexion_speed_per_s);
   for_each_chunk(static_cast<int>(stretches.size()), options.threads, [&](int s) {
     Stretch& stretch = stretches[static_cast<std::size_t>(s)];
     Tracker tracker(model, mapping, pass_options, recording.rate_hz, samples);
