@@ -9,6 +9,7 @@
 #include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
+#include <s2kf/sim/subject.hpp>
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
@@ -315,6 +316,80 @@ TEST(Tracker, AHandNoMarkerSeesStaysWhereItWasLastSeen) {
   EXPECT_LT(rms_with, rms_without);
   std::cout << "hidden hand: largest move " << move_with << " deg (without the dependencies " << move_without
             << "), RMS error " << rms_with << " deg (" << rms_without << ")\n";
+}
+
+// The random walk's noise by joint kind: the limbs' flexions (LSx ... RAx) at
+// flexion_speed_per_s, every other joint at joint_speed_per_s, per frame (speed / rate)^2.
+TEST(Tracker, WalksTheFlexionsFasterThanTheOtherJoints) {
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const auto mapping = track::map_markers(model.marker_names(), model.marker_names());
+  track::TrackerOptions options;
+  options.flexion_speed_per_s = 9;
+  options.joint_speed_per_s = 3;
+  const double rate = 120;
+  const track::Tracker tracker(model, mapping, options, rate, test::tracker_samples());
+  int flexions = 0;
+  for (int j = 0; j < model.joint_count(); ++j) {
+    const std::string& name = model.joints[static_cast<std::size_t>(j)].name;
+    const bool flexion = name.size() == 3 && name[2] == 'x' && (name[0] == 'L' || name[0] == 'R') &&
+                         std::string("SEHKA").find(name[1]) != std::string::npos;
+    flexions += flexion;
+    EXPECT_DOUBLE_EQ(tracker.process_noise()(6 + j, 6 + j), std::pow((flexion ? 9.0 : 3.0) / rate, 2))
+        << name;
+  }
+  EXPECT_EQ(flexions, 10);
+  EXPECT_TRUE(body::is_limb_flexion("RKx"));
+  EXPECT_FALSE(body::is_limb_flexion("REz"));
+  EXPECT_FALSE(body::is_limb_flexion("BPx"));
+  EXPECT_FALSE(body::is_limb_flexion("LWx"));
+  options.flexion_speed_per_s = -1;
+  EXPECT_THROW(track::Tracker(model, mapping, options, rate, test::tracker_samples()), std::invalid_argument);
+}
+
+// Under the paper's occlusion a segment often shows one of its two or three markers; a twist or a
+// wrist that only such a marker sees then follows that marker's soft tissue if its walk is as
+// loose as a swinging limb's. The slower walk of the joints other than the flexions holds them.
+TEST(Tracker, TheSlowerWalkOfTheOtherJointsHoldsPartlyHiddenSegments) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const std::string base = simulate_with_program(
+      "occluded_walk", "--motion walk --seed 1 --height 1750 --frames 400 --occlusion 0.005,100");
+  const auto recording = c3d::read_c3d(base + ".c3d");
+  const auto truth = io::load_motion_csv(base + "_truth.csv");
+  // Tracked with the subject the simulation drew (`s2kf simulate --seed 1` draws it as
+  // make_subject does), so that what is left is the filter's, not the marker set's placement.
+  const body::BodyModel subject =
+      sim::make_subject(body::mmm_body_model(1750), sim::SubjectOptions{}, 1).model;
+  const auto mapping = track::map_markers(labels_of(recording), subject.marker_names());
+  const auto track_with = [&](const track::TrackerOptions& options) {
+    Tracked result;
+    track::Tracker tracker(subject, mapping, options, recording.info.rate, test::tracker_samples(options));
+    auto next = frames_of(recording, recording.frame_count());
+    result.run = track::run_tracking(tracker, next, recording.info.rate, subject.joint_names(), true);
+    result.truth = track::compare_with_truth(subject, result.run.motion, truth, 20);
+    return result;
+  };
+  track::TrackerOptions uniform;
+  uniform.joint_speed_per_s = uniform.flexion_speed_per_s;
+  const Tracked by_kind = track_with({});
+  const Tracked one_speed = track_with(uniform);
+  // The forearms' and hands' segments (named by the frames of LEz, REz, LWy, RWy), RMS over them.
+  const auto forearms_and_hands = [](const Tracked& t) {
+    double sum = 0;
+    int count = 0;
+    for (const auto& [segment, rms] : t.truth.segment_rms_deg)
+      if (segment == "LEz" || segment == "REz" || segment == "LWy" || segment == "RWy")
+        sum += rms * rms, ++count;
+    return count == 4 ? std::sqrt(sum / count) : std::numeric_limits<double>::quiet_NaN();
+  };
+  std::cout << "occluded walk: forearms and hands " << forearms_and_hands(by_kind) << " deg (one speed "
+            << forearms_and_hands(one_speed) << "), all segments "
+            << by_kind.truth.segment_orientation_rms_deg << " ("
+            << one_speed.truth.segment_orientation_rms_deg << "), limb flexion "
+            << by_kind.truth.limb_flexion_rms_deg << " (" << one_speed.truth.limb_flexion_rms_deg << ")\n";
+  EXPECT_LT(forearms_and_hands(by_kind), 0.9 * forearms_and_hands(one_speed));
+  EXPECT_LT(by_kind.truth.segment_orientation_rms_deg, one_speed.truth.segment_orientation_rms_deg);
+  // Limb flexion is not asserted: on this one walk it is worse (2.7 against 2.3 degrees), on 22 of
+  // the 24 simulated cases of docs/tracking.md better.
 }
 
 TEST(Tracker, RejectsOptionsAndMappingsThatCannotWork) {
