@@ -253,13 +253,11 @@ S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping, Track
   process_noise_ = Eigen::MatrixXd::Zero(d, d);
   process_noise_.diagonal().segment<3>(0).setConstant(std::pow(options_.position_speed_mm_per_s * dt, 2));
   process_noise_.diagonal().segment<3>(3).setConstant(std::pow(options_.orientation_speed_rad_per_s * dt, 2));
-  for (int j = 0; j < joint_count(); ++j)
-    process_noise_(kRootDofs + j, kRootDofs + j) =
-        std::pow((body::is_limb_flexion(model_.joints[static_cast<std::size_t>(j)].name)
-                      ? options_.flexion_speed_per_s
-                      : options_.joint_speed_per_s) *
-                     dt,
-                 2);
+  for (int j = 0; j < joint_count(); ++j) {
+    const bool flexion = body::is_limb_flexion(model_.joints[static_cast<std::size_t>(j)].name);
+    const double speed = flexion ? options_.flexion_speed_per_s : options_.joint_speed_per_s;
+    process_noise_(kRootDofs + j, kRootDofs + j) = std::pow(speed * dt, 2);
+  }
   transition_ = Eigen::MatrixXd::Identity(d, d);
   if (with_rates()) {
     // White-noise acceleration of spectral density q per component: the exact
