@@ -61,7 +61,7 @@ struct TrackerOptions {
   /// and a lone visible marker turn them. On simulated realistic subjects (five motions, among them
   /// a dance whose twists move; six seeds) 4 instead of 8 lowered the segment RMS with the paper's
   /// occlusion (11.30 -> 10.09 degrees over 12 cases, 10.51 -> 9.52 over 15 others) and left no
-  /// mean worse without it (docs/tracking.md).
+  /// segment or flexion mean worse without it (docs/tracking.md).
   double flexion_speed_per_s = 8.0;
   double joint_speed_per_s = 4.0;
 
