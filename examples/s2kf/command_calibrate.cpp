@@ -4,6 +4,7 @@
 #include "command.hpp"
 #include "extra_outputs.hpp"
 #include "marker_set_json.hpp"
+#include "track_summary.hpp"  // fixed_text
 #include "tracker_samples.hpp"
 
 #include <s2kf/body/body_model.hpp>
@@ -15,10 +16,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <iomanip>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <thread>
 
 namespace s2kf::cli {
@@ -31,12 +30,6 @@ struct CalibrateSettings : SubjectSettings {
   std::string out;
   bool quiet = false;
 };
-
-std::string fixed(double value, int precision) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(precision) << value;
-  return s.str();
-}
 
 void run_calibrate(CalibrateSettings settings) {
   settings.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -89,10 +82,10 @@ void run_calibrate(CalibrateSettings settings) {
   if (settings.quiet) return;
   for (const std::string& message : calibrated.messages) std::cout << message << "\n";
   for (const std::string& warning : session.warnings) std::cout << "warning: " << warning << "\n";
-  std::cout << fs::path(settings.input).filename().string() << ": body height " << fixed(height, 0) << " mm ("
-            << height_source << "); mean marker distance "
-            << fixed(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
-            << fixed(calibration.mean_marker_distance_after_mm, 1) << " mm after " << settings.iterations
+  std::cout << fs::path(settings.input).filename().string() << ": body height " << fixed_text(height, 0)
+            << " mm (" << height_source << "); mean marker distance "
+            << fixed_text(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
+            << fixed_text(calibration.mean_marker_distance_after_mm, 1) << " mm after " << settings.iterations
             << " calibration iteration(s).\nWrote " << settings.out << ", " << osim->path().string()
             << " and " << report_path << ".\n";
 }
