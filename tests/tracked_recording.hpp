@@ -52,20 +52,14 @@ struct Tracked {
   double height_mm = 0;
 };
 
-// Tracks `recording` (optionally only its first `frames`) as `s2kf track` does: height from rigid
-// marker pairs, default options.
-inline Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& truth,
-                               Eigen::Index frames = 0, track::TrackerOptions options = {}) {
-  body::BodyModel model = body::mmm_body_model(1000);
+// Tracks `recording` (optionally only its first `frames`) with `model` as it is; the truth is
+// compared after `warmup` frames.
+inline Tracked track_with_model(const c3d::Recording& recording, const io::MotionTable& truth,
+                                const body::BodyModel& model, Eigen::Index frames = 0,
+                                track::TrackerOptions options = {}, long warmup = 10) {
   const track::MarkerMapping mapping = track::map_markers(labels_of(recording), model.marker_names());
-  track::HeightEstimator heights(model, mapping);
-  // As `s2kf track` does: up to 200 frames spread evenly through the recording.
-  const Eigen::Index step = std::max<Eigen::Index>(1, recording.frame_count() / 200);
-  for (Eigen::Index f = 0; f < recording.frame_count(); f += step)
-    heights.add_frame(recording.frame(f), recording.visible.col(f));
   Tracked result;
-  result.height_mm = heights.height_mm().value_or(1750);
-  model = model.scaled(result.height_mm);
+  result.height_mm = model.height_mm;
   result.model = model;
   track::Tracker tracker(model, mapping, options, recording.info.rate, test::tracker_samples(options));
   const Eigen::Index end = frames > 0 ? std::min(frames, recording.frame_count()) : recording.frame_count();
@@ -74,8 +68,22 @@ inline Tracked track_recording(const c3d::Recording& recording, const io::Motion
   result.converged =
       track::converged_frame(result.run.mean_marker_distance, track::frames_per_second(recording.info.rate));
   result.level_mm = track::mean_from(result.run.mean_marker_distance, result.converged);
-  result.truth = track::compare_with_truth(model, result.run.motion, truth, 10);
+  result.truth = track::compare_with_truth(model, result.run.motion, truth, warmup);
   return result;
+}
+
+// Tracks `recording` (optionally only its first `frames`) as `s2kf track` does: height from rigid
+// marker pairs, default options.
+inline Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& truth,
+                               Eigen::Index frames = 0, track::TrackerOptions options = {}) {
+  const body::BodyModel model = body::mmm_body_model(1000);
+  track::HeightEstimator heights(model, track::map_markers(labels_of(recording), model.marker_names()));
+  // As `s2kf track` does: up to 200 frames spread evenly through the recording.
+  const Eigen::Index step = std::max<Eigen::Index>(1, recording.frame_count() / 200);
+  for (Eigen::Index f = 0; f < recording.frame_count(); f += step)
+    heights.add_frame(recording.frame(f), recording.visible.col(f));
+  return track_with_model(recording, truth, model.scaled(heights.height_mm().value_or(1750)), frames,
+                          options);
 }
 
 /// The session the evaluation's tests use: the model's own markers, the height given or estimated,

@@ -359,19 +359,10 @@ TEST(Tracker, TheSlowerWalkOfTheOtherJointsHoldsPartlyHiddenSegments) {
   // make_subject does), so that what is left is the filter's, not the marker set's placement.
   const body::BodyModel subject =
       sim::make_subject(body::mmm_body_model(1750), sim::SubjectOptions{}, 1).model;
-  const auto mapping = track::map_markers(labels_of(recording), subject.marker_names());
-  const auto track_with = [&](const track::TrackerOptions& options) {
-    Tracked result;
-    track::Tracker tracker(subject, mapping, options, recording.info.rate, test::tracker_samples(options));
-    auto next = frames_of(recording, recording.frame_count());
-    result.run = track::run_tracking(tracker, next, recording.info.rate, subject.joint_names(), true);
-    result.truth = track::compare_with_truth(subject, result.run.motion, truth, 20);
-    return result;
-  };
   track::TrackerOptions uniform;
   uniform.joint_speed_per_s = uniform.flexion_speed_per_s;
-  const Tracked by_kind = track_with({});
-  const Tracked one_speed = track_with(uniform);
+  const Tracked by_kind = track_with_model(recording, truth, subject, 0, {}, 20);
+  const Tracked one_speed = track_with_model(recording, truth, subject, 0, uniform, 20);
   // The forearms' and hands' segments (named by the frames of LEz, REz, LWy, RWy), RMS over them.
   const auto forearms_and_hands = [](const Tracked& t) {
     double sum = 0;
