@@ -9,6 +9,7 @@
 
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
+#include <s2kf/core/product_tiles.hpp>
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 #include <s2kf/io/c3d_reader.hpp>
@@ -173,11 +174,12 @@ struct Floor {
     }
   }
   void rank_update() {
-    cyy.selfadjointView<Eigen::Lower>().rankUpdate(deviations);
+    s2kf::add_self_product_lower(cyy, deviations);
     benchmark::DoNotOptimize(cyy.data());
   }
   void regression() {
-    regression_t.noalias() = unit_half * pair_difference.transpose();
+    regression_t.setZero();
+    s2kf::add_product_transposed(regression_t, unit_half, pair_difference);
     benchmark::DoNotOptimize(regression_t.data());
   }
   void run() {

@@ -25,6 +25,7 @@
 #include <s2kf/core/lcd_distance.hpp>
 #include <s2kf/core/lcd_sample_set.hpp>
 #include <s2kf/core/marginal_update.hpp>
+#include <s2kf/core/product_tiles.hpp>
 #include <s2kf/core/rts_smoother.hpp>
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/core/sample_set.hpp>

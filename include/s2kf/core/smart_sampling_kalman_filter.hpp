@@ -10,6 +10,7 @@
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/gaussian.hpp>
+#include <s2kf/core/product_tiles.hpp>
 #include <s2kf/core/sample_set.hpp>
 
 #include <Eigen/Cholesky>
@@ -229,7 +230,10 @@ class FilterCore {
         while (end < mo && group_of(index_(end)) == group_of(index_(k))) ++end;
         auto block = products.topLeftCorner(end - k, end - k);
         block.setZero();
-        block.template selfadjointView<Eigen::Lower>().rankUpdate(d.middleRows(k, end - k));
+        if constexpr (std::is_same_v<Scalar, float>)
+          add_self_product_lower(block, d.middleRows(k, end - k));
+        else
+          block.template selfadjointView<Eigen::Lower>().rankUpdate(d.middleRows(k, end - k));
         for (Eigen::Index j = 0; j < end - k; ++j)
           for (Eigen::Index i = j; i < end - k; ++i) cyy(k + i, k + j) += static_cast<double>(block(i, j));
         k = end;
@@ -1104,7 +1108,7 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
         y_dev_f = (y_dev * sqrt_weights_.asDiagonal()).template cast<float>();
       auto cyy_f = single_buffer(cyy_f_, mo, mo);
       cyy_f.template triangularView<Eigen::Lower>().setZero();
-      rank_update_lower(cyy_f, y_dev_f);
+      add_self_product_lower(cyy_f, y_dev_f);
       cyy.template triangularView<Eigen::Lower>() += cyy_f.template cast<double>();
       auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
       pair_difference_f.noalias() = y_dev_f.middleCols(o, h) - y_dev_f.rightCols(h);
@@ -1112,10 +1116,7 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
       half_f = half_deviation_.template cast<float>();
       auto cyx_f = single_buffer(cyx_f_, mo, cyx.cols());
       cyx_f.setZero();
-      for (Eigen::Index k = 0; k < h; k += kChunk) {
-        const Eigen::Index c = std::min(kChunk, h - k);
-        cyx_f.noalias() += pair_difference_f.middleCols(k, c) * half_f.middleCols(k, c).transpose();
-      }
+      add_product_transposed(cyx_f, pair_difference_f, half_f);
       cyx = cyx_f.template cast<double>();
       return;
     }
@@ -1170,12 +1171,13 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
     sum_of_squares(spread_f, y_dev_f);
     component_spread_.head(mo) = spread_f.template cast<double>();
     auto regression_f = single_buffer(regression_f_, n, mo);
+    regression_f.setZero();
     if (symmetric_) {
       auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
       pair_difference_f.noalias() = y_dev_f.middleCols(o, h) - y_dev_f.rightCols(h);
-      product(regression_f, scaled_points_f_, pair_difference_f);
+      add_product_transposed(regression_f, scaled_points_f_, pair_difference_f);
     } else {
-      product(regression_f, scaled_points_f_, y_dev_f);
+      add_product_transposed(regression_f, scaled_points_f_, y_dev_f);
     }
     regression = regression_f.template cast<double>();
     if (quadratic_count_ > 0) accumulate_quadratic_regression(true);
