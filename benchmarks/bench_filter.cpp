@@ -2,15 +2,19 @@
 // for the UKF-sized set (93 samples) and LCD sets of 301 and 461 samples; and the gain's
 // factorisation at the tracker's sizes (a leg's 24 components, the pelvis's 21, the 46 x 46
 // information matrix, the upper body's 81, the whole 150) with a border of 47 rows (46 states and
-// the innovation): BorderedCholesky against Eigen's LLT and triangular solve.
+// the innovation): BorderedCholesky against Eigen's LLT and triangular solve; and the moments'
+// single-precision products at the step's sizes (args: rows, columns, samples): the lower half of
+// D D^T and D Z^T by the register tiles (product_tiles.hpp) against Eigen's products.
 //   build/benchmarks/bench_filter --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <s2kf/core/bordered_cholesky.hpp>
+#include <s2kf/core/product_tiles.hpp>
 #include <s2kf/core/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 
 #include <benchmark/benchmark.h>
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <random>
 
 namespace {
@@ -95,6 +99,53 @@ BENCHMARK(BM_EigenCholeskyAndSolve)
     ->Arg(81)
     ->Arg(150)
     ->Unit(benchmark::kMicrosecond);
+
+// The moments' products. Args: rows of D (150 coordinates, 81 the upper body's), columns of the
+// other factor (0: D D^T, lower half; else the rows of Z: 46 states), samples.
+struct ProductInput {
+  Eigen::MatrixXf left, right, target;
+  explicit ProductInput(const benchmark::State& state)
+      : left(Eigen::MatrixXf::Random(state.range(0), state.range(2))),
+        right(Eigen::MatrixXf::Random(state.range(1), state.range(2))),
+        target(state.range(0), state.range(1) == 0 ? state.range(0) : state.range(1)) {}
+};
+
+void BM_ProductTiles(benchmark::State& state) {
+  ProductInput p(state);
+  for (auto _ : state) {
+    p.target.setZero();
+    if (p.right.rows() == 0)
+      s2kf::add_self_product_lower(p.target, p.left);
+    else
+      s2kf::add_product_transposed(p.target, p.left, p.right);
+    benchmark::DoNotOptimize(p.target.data());
+  }
+}
+
+// Eigen's products as the filter used them before the tiles: the rank update and the general
+// product over chunks of 96 samples (their packing buffers then stay on the stack).
+void BM_EigenProducts(benchmark::State& state) {
+  ProductInput p(state);
+  constexpr Eigen::Index chunk = 96;
+  for (auto _ : state) {
+    p.target.setZero();
+    for (Eigen::Index k = 0; k < p.left.cols(); k += chunk) {
+      const Eigen::Index c = std::min(chunk, p.left.cols() - k);
+      if (p.right.rows() == 0)
+        p.target.selfadjointView<Eigen::Lower>().rankUpdate(p.left.middleCols(k, c));
+      else
+        p.target.noalias() += p.left.middleCols(k, c) * p.right.middleCols(k, c).transpose();
+    }
+    benchmark::DoNotOptimize(p.target.data());
+  }
+}
+
+void product_args(benchmark::internal::Benchmark* b) {
+  b->Args({150, 0, 301})->Args({150, 0, 93})->Args({81, 0, 301})->Args({150, 46, 150})->Args({46, 150, 150});
+  b->ArgNames({"rows", "columns", "samples"})->Unit(benchmark::kMicrosecond);
+}
+BENCHMARK(BM_ProductTiles)->Apply(product_args);
+BENCHMARK(BM_EigenProducts)->Apply(product_args);
 
 }  // namespace
 

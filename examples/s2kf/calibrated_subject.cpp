@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
-#include <thread>
 
 namespace s2kf::cli {
 
@@ -66,7 +65,7 @@ SubjectSettings static_trial_settings(const std::string& markerset, double heigh
   settings.noise_from_calibration = noise_from_calibration;
   settings.static_pose = true;
   settings.static_sd_deg = static_sd_deg;
-  settings.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  settings.threads = every_core();
   return settings;
 }
 

@@ -12,7 +12,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace s2kf::cli {
@@ -28,8 +30,11 @@ struct SubjectSettings {
   bool noise_from_calibration = true;
   bool static_pose = false;  ///< a static trial in the model's zero pose
   double static_sd_deg = 3.0;
-  int threads = 1;
+  int threads = 1;  ///< the calibration's threads (every_core() for all)
 };
+
+/// Threads that use every core of this machine (at least one, where the count is unknown).
+inline int every_core() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 struct CalibratedSubject {
   MarkerSetChoice choice;

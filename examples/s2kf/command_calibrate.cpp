@@ -13,12 +13,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <thread>
 
 namespace s2kf::cli {
 namespace {
@@ -32,7 +30,7 @@ struct CalibrateSettings : SubjectSettings {
 };
 
 void run_calibrate(CalibrateSettings settings) {
-  settings.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  settings.threads = every_core();
   const std::string name = fs::path(settings.out).stem().string();
   const CalibratedSubject calibrated = calibrate_subject_file(
       settings.input, "", settings, cached_sample_set(46, track::TrackerOptions{}.samples), name);

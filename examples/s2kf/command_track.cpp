@@ -17,7 +17,6 @@
 #include <iostream>
 #include <memory>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace s2kf::cli {
@@ -94,7 +93,7 @@ void run_track(const TrackSettings& given) {
     if (fs::path(prefixes[0]).has_parent_path()) fs::create_directories(fs::path(prefixes[0]).parent_path());
     const bool terminal = isatty(STDERR_FILENO) && !settings.quiet;
     TrackSettings one = settings;  // one recording: its calibration may take every core
-    one.calibration_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    one.calibration_threads = every_core();
     TrackOutcome outcome;
     try {
       outcome = track_file(todo[0].input, prefixes[0], one, terminal);
@@ -108,7 +107,7 @@ void run_track(const TrackSettings& given) {
   }
   // A batch: one recording per thread. A recording that fails is reported (its line names it, its
   // PREFIX.json records why) and the others go on; the exit status says that some failed.
-  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  const auto hardware = static_cast<unsigned>(every_core());
   const unsigned jobs = settings.jobs > 0 ? static_cast<unsigned>(settings.jobs) : hardware;
   track_in_batch(todo, prefixes, jobs, settings.quiet, [&](std::size_t i) {
     return track_file(todo[i].input, prefixes[i], settings, false).paragraph;

@@ -31,7 +31,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace s2kf::python {
@@ -380,7 +379,7 @@ void bind_track(py::module_& module) {
         settings.noise_from_calibration = !uniform_noise;
         settings.static_pose = static_pose;
         settings.static_sd_deg = static_sd;
-        settings.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+        settings.threads = cli::every_core();
         return calibrate(recording, out, settings);
       },
       py::arg("recording"), py::kw_only(), py::arg("out") = py::none(), py::arg("static") = false,
