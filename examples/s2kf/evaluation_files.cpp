@@ -170,7 +170,7 @@ void draw_evaluation_figures(const fs::path& out, const EvaluationSeries& s,
          "  plot 'samples.csv' using 1:2 with linespoints title 'median', 'samples.csv' using 1:3 with "
          "linespoints "
          "title 'p99'\n"
-         "  set ylabel 'error'\n"
+         "  set ylabel 'error'; set key center right  # between the distance and the segment curves\n"
          "  plot 'samples.csv' using 1:5 with linespoints title 'marker distance (mm)', 'samples.csv' using "
          "1:7 with "
          "linespoints title 'segment orientation RMS (deg)', 'samples.csv' using 1:9 with linespoints title "
