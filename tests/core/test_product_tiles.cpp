@@ -8,11 +8,8 @@
 namespace {
 
 Eigen::MatrixXf product_test_matrix(Eigen::Index rows, Eigen::Index cols, std::mt19937& random) {
-  std::normal_distribution<float> normal;
-  Eigen::MatrixXf m(rows, cols);
-  for (Eigen::Index j = 0; j < cols; ++j)
-    for (Eigen::Index i = 0; i < rows; ++i) m(i, j) = 10.0f * normal(random);
-  return m;
+  std::normal_distribution<float> normal(0.0f, 10.0f);
+  return Eigen::MatrixXf::NullaryExpr(rows, cols, [&] { return normal(random); });
 }
 
 // The sizes cross every tile edge: 1-row and 1-column remainders below 8 rows or the tile's
