@@ -326,7 +326,8 @@ void bind_track(py::module_& module) {
          const py::object& markerset, const py::object& subject, const py::object& static_trial,
          double static_sd, bool calibrate, std::int64_t calibration_frames, double calibration_shrink,
          bool uniform_noise, bool smooth, int samples, double height_mm, const std::string& preset,
-         const std::string& method, const py::object& model_output, const py::object& name) {
+         const std::string& gain, const std::string& method, const py::object& model_output,
+         const py::object& name) {
         TrackSettings settings;
         settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();
         settings.subject = subject.is_none() ? std::string() : py::str(subject).cast<std::string>();
@@ -342,6 +343,7 @@ void bind_track(py::module_& module) {
         settings.samples = samples;
         settings.height_mm = height_mm;
         settings.preset = preset;
+        settings.gain = gain;
         settings.method = method;
         return track(recording, labels, rate, settings, model_output, name);
       },
@@ -350,8 +352,8 @@ void bind_track(py::module_& module) {
       py::arg("static_sd") = 3.0, py::arg("calibrate") = true, py::arg("calibration_frames") = 1200,
       py::arg("calibration_shrink") = track::CalibrationOptions{}.weak_direction_shrink,
       py::arg("uniform_noise") = false, py::arg("smooth") = false, py::arg("samples") = 301,
-      py::arg("height_mm") = 0.0, py::arg("preset") = "default", py::arg("method") = "s2kf",
-      py::arg("model_output") = py::none(), py::arg("name") = py::none(),
+      py::arg("height_mm") = 0.0, py::arg("preset") = "default", py::arg("gain") = "information-form",
+      py::arg("method") = "s2kf", py::arg("model_output") = py::none(), py::arg("name") = py::none(),
       "Tracks a whole recording as `s2kf track` does: track('walk.c3d'), track(s2kf.read_c3d(...)), or "
       "track(points, labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
       "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "
@@ -360,7 +362,10 @@ void bind_track(py::module_& module) {
       "calibrate: fit the subject's offsets and bone lengths on the first calibration_frames frames; "
       "calibration_shrink: C, a weakly seen offset direction keeps mu / (mu + C) of the data's step; "
       "uniform_noise: every marker the same noise (else each its calibration residual's); smooth: "
-      "RTS smoothing; height_mm: 0 estimates it; model_output: (P,) bool, points that are not markers. "
+      "RTS smoothing; height_mm: 0 estimates it; gain: 'information-form', 'square-root' (the exact update) "
+      "or "
+      "'information-form-root-products' (as `s2kf track --gain`); model_output: (P,) bool, points that are "
+      "not markers. "
       "Runs without the GIL. Returns a TrackResult.");
 
   module.def(

@@ -59,6 +59,7 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   track::SessionOptions session_options;
   try {
     session_options.tracker = track::preset_options(settings.preset, source.rate_hz());
+    track::set_gain_from_name(session_options.tracker, settings.gain);
   } catch (const std::invalid_argument& e) {
     throw cli::UserError(e.what());
   }

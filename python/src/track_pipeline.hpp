@@ -31,6 +31,7 @@ struct TrackSettings {
   int samples = 301;
   double height_mm = 0;
   std::string preset = "default";
+  std::string gain = "information-form";  // square-root, information-form-root-products
   std::string method = "s2kf";
 };
 

@@ -56,11 +56,12 @@ std::unique_ptr<StreamingTracker> streaming_tracker_for_marker_set(const std::ve
                                             samples, static_cast<Eigen::Index>(labels.size()));
 }
 
-track::TrackerOptions tracker_options(const std::string& preset, double rate, int samples,
-                                      double marker_noise_mm, double gate_probability) {
+track::TrackerOptions tracker_options(const std::string& preset, const std::string& gain, double rate,
+                                      int samples, double marker_noise_mm, double gate_probability) {
   track::TrackerOptions options;
   try {
     options = track::preset_options(preset, rate);
+    track::set_gain_from_name(options, gain);
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   }
@@ -114,9 +115,9 @@ void bind_tracker(py::module_& module) {
       .def(
           py::init([](const std::vector<std::string>& labels, double rate, const body::BodyModel* model,
                       const py::object& markerset, double height_mm, int samples, const std::string& preset,
-                      double marker_noise_mm, double gate_probability) {
+                      const std::string& gain, double marker_noise_mm, double gate_probability) {
             track::TrackerOptions options =
-                tracker_options(preset, rate, samples, marker_noise_mm, gate_probability);
+                tracker_options(preset, gain, rate, samples, marker_noise_mm, gate_probability);
             if (markerset.is_none())
               return streaming_tracker_for_labels(labels, rate,
                                                   model ? *model : body::mmm_body_model(height_mm), options);
@@ -125,10 +126,12 @@ void bind_tracker(py::module_& module) {
           }),
           py::arg("labels"), py::arg("rate"), py::arg("model") = nullptr, py::arg("markerset") = py::none(),
           py::arg("height_mm") = 1750.0, py::arg("samples") = 301, py::arg("preset") = "default",
-          py::arg("marker_noise_mm") = 0.0, py::arg("gate_probability") = 0.0,
+          py::arg("gain") = "information-form", py::arg("marker_noise_mm") = 0.0,
+          py::arg("gate_probability") = 0.0,
           "labels: one per point; rate: Hz; model: a BodyModel whose marker names the labels are (default: "
           "the KIT model at height_mm); markerset: 'kit', 'cmu', 'plugin_gait' or a .json file instead, on a "
-          "subject of height_mm; samples: S2KF sample count; preset: 'default' or 'paper'; marker_noise_mm: "
+          "subject of height_mm; samples: S2KF sample count; preset: 'default' or 'paper'; gain: "
+          "'information-form', 'square-root' or 'information-form-root-products'; marker_noise_mm: "
           "0 keeps the preset's")
       .def("process", &StreamingTracker::process, py::arg("frame"), py::arg("visible") = py::none(),
            "One frame: (P, 3) mm in label order (NaN: hidden), optional (P,) visibility. Returns a "

@@ -98,6 +98,24 @@ def test_plug_in_gait_with_model_outputs_as_the_program(cli, tmp_path, c3d_dir):
     assert again.summary["labels_ignored"] == result.summary["labels_ignored"]
 
 
+def test_the_gain_as_the_program_takes_it(cli, tmp_path, data_dir):
+    """gain='square-root' is the exact update (`s2kf track --gain square-root`): other poses than the
+    default information form, recorded in the summary; the streaming Tracker takes it too."""
+    path = str(data_dir / "handstand.c3d")
+    exact = s2kf.track(path, calibration_frames=300, gain="square-root")
+    same_as_program(cli, tmp_path, exact, [path, "--calibration-frames", "300", "--gain", "square-root"])
+    assert exact.summary["gain"] == "square-root"
+    default = s2kf.track(path, calibration_frames=300)
+    assert default.summary["gain"] == "information-form"
+    assert not np.array_equal(default.poses, exact.poses)
+    rec = s2kf.read_c3d(path)
+    streaming = s2kf.Tracker(rec.labels, rec.rate, samples=101, gain="square-root")
+    informed = s2kf.Tracker(rec.labels, rec.rate, samples=101)
+    frames = rec.points[:50]
+    last = [[t.process(frame).pose for frame in frames][-1] for t in (streaming, informed)]
+    assert not np.array_equal(last[0], last[1])
+
+
 def test_streaming_the_frames_reproduces_the_motion(data_dir):
     rec = s2kf.read_c3d(str(data_dir / "handstand_occluded.c3d"))
     result = s2kf.track(rec, samples=101)
@@ -133,6 +151,10 @@ def test_bad_recordings_are_python_errors(tmp_path, data_dir):
         s2kf.track(points, labels, rate, calibration_shrink=-1.0)
     with pytest.raises(ValueError, match="method must be 's2kf' or 'baseline'"):
         s2kf.track(points, labels, rate, method="ukf")
+    with pytest.raises(ValueError, match="unknown gain 'kalman' \\(use information-form, square-root"):
+        s2kf.track(points, labels, rate, gain="kalman")
+    with pytest.raises(ValueError, match="unknown gain 'kalman'"):
+        s2kf.Tracker(labels, rate, gain="kalman")
 
 
 def test_bad_files_are_os_errors(tmp_path):
