@@ -5,6 +5,7 @@
 #pragma once
 
 #include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/track/height_estimate.hpp>
 #include <s2kf/track/marker_mapping.hpp>
@@ -77,13 +78,10 @@ inline Tracked track_with_model(const c3d::Recording& recording, const io::Motio
 inline Tracked track_recording(const c3d::Recording& recording, const io::MotionTable& truth,
                                Eigen::Index frames = 0, track::TrackerOptions options = {}) {
   const body::BodyModel model = body::mmm_body_model(1000);
-  track::HeightEstimator heights(model, track::map_markers(labels_of(recording), model.marker_names()));
-  // As `s2kf track` does: up to 200 frames spread evenly through the recording.
-  const Eigen::Index step = std::max<Eigen::Index>(1, recording.frame_count() / 200);
-  for (Eigen::Index f = 0; f < recording.frame_count(); f += step)
-    heights.add_frame(recording.frame(f), recording.visible.col(f));
-  return track_with_model(recording, truth, model.scaled(heights.height_mm().value_or(1750)), frames,
-                          options);
+  SequenceFrameSource source(recording);
+  const auto height =
+      track::estimate_height(source, model, track::map_markers(labels_of(recording), model.marker_names()));
+  return track_with_model(recording, truth, model.scaled(height ? height->mm : 1750), frames, options);
 }
 
 /// The session the evaluation's tests use: the model's own markers, the height given or estimated,
