@@ -10,11 +10,11 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
 #include <s2kf/core/product_tiles.hpp>
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 #include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <benchmark/benchmark.h>
@@ -39,7 +39,7 @@ constexpr int kWarmupFrames = 30;  // past the iterated (converging) frames: a c
 /// both visibility patterns.
 struct Scenario {
   body::BodyModel model;
-  track::MarkerMapping mapping;
+  body::MarkerMapping mapping;
   double rate = 0;
   std::vector<Eigen::Matrix3Xd> frames;
   std::vector<Visible> all_visible, some_hidden;
@@ -60,8 +60,8 @@ struct Scenario {
     std::vector<std::string> labels;
     for (const auto& label : recording.info.labels) labels.push_back(label.name);
     s.model = body::mmm_body_model(1000);
-    s.mapping = track::map_markers(labels, s.model.marker_names());
-    track::HeightEstimator heights(s.model, s.mapping);
+    s.mapping = body::map_markers(labels, s.model.marker_names());
+    calibration::HeightEstimator heights(s.model, s.mapping);
     const Eigen::Index step = std::max<Eigen::Index>(1, recording.frame_count() / 200);
     for (Eigen::Index f = 0; f < recording.frame_count(); f += step)
       heights.add_frame(recording.frame(f), recording.visible.col(f));

@@ -27,9 +27,9 @@
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/sim/recording.hpp>
-#include <s2kf/track/session.hpp>
-#include <s2kf/track/true_subject_reference.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <string>
 #include "marker_set_json.hpp"
 #include "motion_json.hpp"
@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
   sim::RecordingOptions ro;
   if (occl) ro.occlusion = {sim::kPaperOcclusionProbability, sim::kPaperOcclusionMeanFrames};
   const sim::Recording rec = sim::simulate_recording(motion, subject, ro, seed);
-  track::SessionOptions opt;
+  pipeline::SessionOptions opt;
   opt.calibrate = calib;
   if (const char* v = std::getenv("OFFSET_SD")) opt.calibration.offset_prior_sd_mm = std::atof(v);
   if (const char* v = std::getenv("SCALE_SD")) opt.calibration.scale_prior_sd_per_frame = std::atof(v);
@@ -78,13 +78,13 @@ int main(int argc, char** argv) {
   SequenceFrameSource source(rec);
   const body::MarkerSet set = cli::choose_marker_set_for(rec.labels, "", "").set;
   const SampleSet samples = cli::cached_sample_set(46, opt.tracker.samples);
-  const track::Session session = track::prepare_session(source, set, opt, samples);
-  track::RunOptions run_options;
+  const pipeline::Session session = pipeline::prepare_session(source, set, opt, samples);
+  pipeline::RunOptions run_options;
   run_options.smooth = smooth;
   SequenceFrameSource source2(rec);
-  const track::TrackingRun run = track::run_session(session, source2, samples, run_options);
+  const track::TrackingRun run = pipeline::run_session(session, source2, samples, run_options);
   const io::MotionTable truth = sim::truth_motion(rec, session.model.joint_names());
-  const auto t = track::compare_with_truth(session.model, run.motion, truth, 20);
+  const auto t = evaluation::compare_with_truth(session.model, run.motion, truth, 20);
   std::vector<double> s = run.seconds;
   std::sort(s.begin(), s.end());
   std::printf("%s seed %u occl %d smooth %d: seg %.2f flex %.2f root %.2f viol %ld dist %.2f med %.2f ms",
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
               t.root_orientation_rms_deg, t.joint_limit_violations,
               track::mean_from(run.mean_marker_distance, 20), 1000 * s[s.size() / 2]);
   if (ref) {
-    const auto r = track::compare_with_truth(session.model, track::true_subject_fit(subject, rec), truth, 20);
+    const auto r = evaluation::compare_with_truth(session.model, evaluation::true_subject_fit(subject, rec), truth, 20);
     std::printf(" | ref seg %.2f flex %.2f root %.2f", r.segment_orientation_rms_deg, r.limb_flexion_rms_deg,
                 r.root_orientation_rms_deg);
   }
@@ -105,10 +105,10 @@ int main(int argc, char** argv) {
       std::printf("\n");
     }
   if (std::getenv("SUBJECT") && calib) {  // the calibrated and the nominal subject against the true one
-    track::SessionOptions nominal_options = opt;
+    pipeline::SessionOptions nominal_options = opt;
     nominal_options.calibrate = false;
     SequenceFrameSource source3(rec);
-    const body::BodyModel nominal = track::prepare_session(source3, set, nominal_options, samples).model;
+    const body::BodyModel nominal = pipeline::prepare_session(source3, set, nominal_options, samples).model;
     const body::BodyModel& truth_model = subject.model;
     std::map<std::string, std::pair<double, int>> nominal_error, calibrated_error;
     for (const body::Marker& marker : truth_model.markers)

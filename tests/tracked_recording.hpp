@@ -7,13 +7,13 @@
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_mapping.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "tracker_samples.hpp"
 
@@ -47,7 +47,7 @@ inline std::vector<std::string> labels_of(const c3d::Recording& recording) {
 struct Tracked {
   body::BodyModel model;  // scaled to the estimated height
   track::TrackingRun run;
-  track::TruthComparison truth;
+  evaluation::TruthComparison truth;
   long converged = 0;
   double level_mm = 0;  // mean marker distance after convergence
   double height_mm = 0;
@@ -58,7 +58,7 @@ struct Tracked {
 inline Tracked track_with_model(const c3d::Recording& recording, const io::MotionTable& truth,
                                 const body::BodyModel& model, Eigen::Index frames = 0,
                                 track::TrackerOptions options = {}, long warmup = 10) {
-  const track::MarkerMapping mapping = track::map_markers(labels_of(recording), model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(labels_of(recording), model.marker_names());
   Tracked result;
   result.height_mm = model.height_mm;
   result.model = model;
@@ -69,7 +69,7 @@ inline Tracked track_with_model(const c3d::Recording& recording, const io::Motio
   result.converged =
       track::converged_frame(result.run.mean_marker_distance, track::frames_per_second(recording.info.rate));
   result.level_mm = track::mean_from(result.run.mean_marker_distance, result.converged);
-  result.truth = track::compare_with_truth(model, result.run.motion, truth, warmup);
+  result.truth = evaluation::compare_with_truth(model, result.run.motion, truth, warmup);
   return result;
 }
 
@@ -80,18 +80,18 @@ inline Tracked track_recording(const c3d::Recording& recording, const io::Motion
   const body::BodyModel model = body::mmm_body_model(1000);
   SequenceFrameSource source(recording);
   const auto height =
-      track::estimate_height(source, model, track::map_markers(labels_of(recording), model.marker_names()));
+      calibration::estimate_height(source, model, body::map_markers(labels_of(recording), model.marker_names()));
   return track_with_model(recording, truth, model.scaled(height ? height->mm : 1750), frames, options);
 }
 
 /// The session the evaluation's tests use: the model's own markers, the height given or estimated,
 /// no calibration (they compare the methods on the model as it is).
-inline track::Session evaluation_session(const MarkerSequence& recording, double height_mm = 0) {
+inline pipeline::Session evaluation_session(const MarkerSequence& recording, double height_mm = 0) {
   SequenceFrameSource source(recording);
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   options.height_mm = height_mm;
   options.calibrate = false;
-  return track::prepare_session(source, body::model_marker_set(body::mmm_body_model(1000)), options,
+  return pipeline::prepare_session(source, body::model_marker_set(body::mmm_body_model(1000)), options,
                                 test::tracker_samples());
 }
 

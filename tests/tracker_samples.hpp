@@ -3,7 +3,7 @@
 /// computed once per sample count and process.
 #pragma once
 
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/track/tracker_options.hpp>
 
 #include <map>

@@ -19,7 +19,7 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
                                     const std::string& name) {
   CalibratedSubject result;
   result.choice = choose_marker_set_for(source.labels(), settings.markerset, "");
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   options.height_mm = settings.height_mm;
   options.fallback_height_mm = 0;  // a subject file needs a real height: refuse instead
   options.calibrate = true;
@@ -34,11 +34,11 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
   if (settings.static_pose)
     options.calibration.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
   try {
-    result.session = track::prepare_session(source, result.choice.set, options, samples);
+    result.session = pipeline::prepare_session(source, result.choice.set, options, samples);
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": " + e.what());
   }
-  const track::SubjectCalibration& calibration = *result.session.calibration;
+  const calibration::SubjectCalibration& calibration = *result.session.calibration;
   result.subject = subject_marker_set(result.choice.set, calibration.model, calibration.segment_scale,
                                       result.session.tracker.marker_noise_mm_per_marker, name);
   result.messages = marker_set_messages(result.choice, result.session.mapping);
@@ -75,7 +75,7 @@ void write_subject_file(const std::string& path, const nlohmann::json& document)
 
 nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::string& input) {
   nlohmann::json document = marker_set_to_json(calibrated.subject);
-  const track::SubjectCalibration& calibration = *calibrated.session.calibration;
+  const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
   // The loader rejects unknown keys, so the subject file carries only a one-line summary of the
   // calibration in its description.
   document["description"] = calibrated.subject.description + " on " +

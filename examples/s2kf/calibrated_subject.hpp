@@ -8,7 +8,7 @@
 
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -26,7 +26,7 @@ struct SubjectSettings {
   int iterations = 1;
   long frames = 1200;
   bool no_scales = false;
-  double shrink = track::CalibrationOptions{}.weak_direction_shrink;
+  double shrink = calibration::CalibrationOptions{}.weak_direction_shrink;
   bool noise_from_calibration = true;
   bool static_pose = false;  ///< a static trial in the model's zero pose
   double static_sd_deg = 3.0;
@@ -38,7 +38,7 @@ inline int every_core() { return static_cast<int>(std::max(1u, std::thread::hard
 
 struct CalibratedSubject {
   MarkerSetChoice choice;
-  track::Session session;  ///< with its calibration
+  pipeline::Session session;  ///< with its calibration
   body::MarkerSet subject;
   std::vector<std::string> messages;  ///< which marker set and why, labels ignored
 };

@@ -9,7 +9,7 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/io/atomic_file.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -34,14 +34,14 @@ void run_calibrate(CalibrateSettings settings) {
   const std::string name = fs::path(settings.out).stem().string();
   const CalibratedSubject calibrated = calibrate_subject_file(
       settings.input, "", settings, cached_sample_set(46, track::TrackerOptions{}.samples), name);
-  const track::Session& session = calibrated.session;
-  const track::SubjectCalibration& calibration = *session.calibration;
+  const pipeline::Session& session = calibrated.session;
+  const calibration::SubjectCalibration& calibration = *session.calibration;
   const double height = session.height_mm;
   const std::string& height_source = session.height_source;
 
   const nlohmann::json document = subject_document(calibrated, settings.input);
   nlohmann::json passes = nlohmann::json::array();
-  for (const track::CalibrationPass& pass : calibration.passes)
+  for (const calibration::CalibrationPass& pass : calibration.passes)
     passes.push_back({{"mean_marker_distance_mm", pass.mean_marker_distance_mm},
                       {"frames_used", pass.frames_used},
                       {"residuals_rejected", pass.residuals_rejected},

@@ -20,7 +20,7 @@ struct InferSettings {
 
 void run_infer(const InferSettings& settings) {
   const int up = settings.up == "auto" ? -1 : settings.up == "x" ? 0 : settings.up == "y" ? 1 : 2;
-  const track::InferredMarkerSet inferred = infer_marker_set_file(settings.input, settings.out, up);
+  const markerset::InferredMarkerSet inferred = infer_marker_set_file(settings.input, settings.out, up);
   if (settings.quiet) return;
   for (const std::string& note : inferred.notes) std::cout << note << "\n";
   std::cout << inferred.clusters.clusters.size() << " rigid clusters; " << inferred.rounds
@@ -28,7 +28,7 @@ void run_infer(const InferSettings& settings) {
             << " mm; RMS spread of the markers on their segments " << std::fixed << std::setprecision(1)
             << inferred.spread_mm << " mm\n";
   std::cout << "segment  markers  spread (mm)  confidence\n";
-  for (const track::InferredSegment& s : inferred.segments)
+  for (const markerset::InferredSegment& s : inferred.segments)
     std::cout << std::left << std::setw(9) << s.segment << std::right << std::setw(7) << s.markers
               << std::setw(13) << s.spread_mm << std::setw(11) << std::lround(100 * s.confidence) << " %\n";
   std::cout << "Wrote " << settings.out << " (" << inferred.set.entries.size()

@@ -37,7 +37,7 @@ void calibrate_on_static_trial(const TrackSettings& settings, const std::string&
   if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
   write_subject_file(path, subject_document(calibrated, settings.static_trial));
   if (settings.quiet) return;
-  const track::SubjectCalibration& calibration = *calibrated.session.calibration;
+  const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
   std::cout << fs::path(settings.static_trial).filename().string() << " (static trial): mean marker distance "
             << fixed_text(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
             << fixed_text(calibration.mean_marker_distance_after_mm, 1)

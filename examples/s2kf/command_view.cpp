@@ -8,7 +8,7 @@
 #include "viewer/result_page.hpp"
 
 #include <s2kf/io/c3d_frame_source.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -31,7 +31,7 @@ const std::string kSubjectSource = "subject file ";
 /// The model and mapping `s2kf track` tracked the result with: the library's pipeline prepared
 /// again with the summary's marker set, height, preset, sample count and calibration window. The
 /// calibration is deterministic, so the same frames and options give the same subject.
-std::pair<body::BodyModel, track::MarkerMapping> tracked_model(const std::string& prefix,
+std::pair<body::BodyModel, body::MarkerMapping> tracked_model(const std::string& prefix,
                                                                const nlohmann::json& summary) {
   const std::string where = prefix + ".json";
   const std::string input = viewer::recording_path(prefix, summary);
@@ -59,7 +59,7 @@ std::pair<body::BodyModel, track::MarkerMapping> tracked_model(const std::string
     throw UserError(where + ": tracked with the marker set " + summary["marker_set"].dump() + ", but " +
                     input + " now matches " + choice.set.name);
   if (!summary["height_mm"].is_number()) throw UserError(where + ": \"height_mm\" is not a number");
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   try {
     options.tracker =
         track::preset_options(summary.value("preset", std::string("default")), source->rate_hz());
@@ -79,10 +79,10 @@ std::pair<body::BodyModel, track::MarkerMapping> tracked_model(const std::string
     if (calibration["samples"].is_number_integer())
       options.calibration_samples = cached_sample_set(46, calibration["samples"].get<int>());
   }
-  track::Session session;
+  pipeline::Session session;
   try {
     session =
-        track::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
+        pipeline::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": " + e.what());
   }

@@ -18,11 +18,11 @@
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/evaluation.hpp>
-#include <s2kf/track/hidden_time_error.hpp>
-#include <s2kf/track/identifiable_subject_reference.hpp>
-#include <s2kf/track/session.hpp>
-#include <s2kf/track/true_subject_reference.hpp>
+#include <s2kf/evaluation/evaluation.hpp>
+#include <s2kf/evaluation/hidden_time_error.hpp>
+#include <s2kf/evaluation/identifiable_subject_reference.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -79,10 +79,10 @@ std::string machine_name() {
   return "unknown";
 }
 
-json hidden_time_json(const track::HiddenTimeError& e) {
-  const auto bins = [](const std::vector<track::HiddenTimeBin>& b) {
+json hidden_time_json(const evaluation::HiddenTimeError& e) {
+  const auto bins = [](const std::vector<evaluation::HiddenTimeBin>& b) {
     json out = json::array();
-    for (const track::HiddenTimeBin& bin : b)
+    for (const evaluation::HiddenTimeBin& bin : b)
       out.push_back({{"hidden_from_s", bin.lower_s},
                      {"hidden_to_s", std::isfinite(bin.upper_s) ? json(bin.upper_s) : json(nullptr)},
                      {"frames", bin.frames},
@@ -90,12 +90,12 @@ json hidden_time_json(const track::HiddenTimeError& e) {
     return out;
   };
   json segments = json::object();
-  for (const track::SegmentHiddenTimeError& s : e.segments)
+  for (const evaluation::SegmentHiddenTimeError& s : e.segments)
     segments[s.segment] = {{"markers", s.markers}, {"bins", bins(s.bins)}};
   return {{"all_segments", bins(e.all)}, {"segments", segments}};
 }
 
-json result_json(const track::MethodResult& r) {
+json result_json(const evaluation::MethodResult& r) {
   json j = {{"method", track::to_string(r.method)},
             {"samples", r.samples ? json(r.samples) : json(nullptr)},
             {"converged_frame", r.converged_frame},
@@ -167,17 +167,17 @@ void run_evaluate(const EvaluateSettings& settings) {
     complete = complete.frames(0, settings.frames);
   // Prepared exactly as `s2kf track` prepares a recording: the best-matching marker set, the
   // estimated height, and the subject calibration unless --no-calibrate.
-  track::Session setup;
+  pipeline::Session setup;
   try {
     SequenceFrameSource source(complete);
     const MarkerSetChoice choice = choose_marker_set_for(complete.labels, "", "");
-    track::SessionOptions options;
+    pipeline::SessionOptions options;
     options.calibrate = settings.calibrate;
     options.noise_from_calibration = settings.noise_from_calibration;
     options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
     track::set_gain_from_name(options.tracker, settings.gain);
     setup =
-        track::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
+        pipeline::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(recording_path + ": " + e.what());
   }
@@ -188,11 +188,11 @@ void run_evaluate(const EvaluateSettings& settings) {
   } else if (!truth_path.empty()) {
     try {
       truth = io::load_motion_csv(truth_path);
-      track::check_truth(*truth, setup, recorded_frames);
+      evaluation::check_truth(*truth, setup, recorded_frames);
     } catch (const std::exception& e) {
       throw UserError(truth_path + ": " + e.what() + " (" + recording_path + ")");
     }
-    truth = track::first_rows(*truth, settings.frames);
+    truth = evaluation::first_rows(*truth, settings.frames);
   }
   const io::MotionTable* truth_ptr = truth ? &*truth : nullptr;
   const std::size_t frames = static_cast<std::size_t>(complete.frame_count());
@@ -204,21 +204,21 @@ void run_evaluate(const EvaluateSettings& settings) {
       cell(std::round(setup.height_mm)) + " mm" + (truth ? ", truth " + truth_path : ", no truth"));
 
   // The sample-count sweep; the run at the default L is the S2KF of the comparison.
-  std::vector<track::MethodResult> sweep;
+  std::vector<evaluation::MethodResult> sweep;
   for (int samples : sample_counts) {
     sweep.push_back(
-        track::evaluate_method(setup, complete, track::Method::s2kf, samples, truth_ptr, settings.warmup));
+        evaluation::evaluate_method(setup, complete, pipeline::Method::s2kf, samples, truth_ptr, settings.warmup));
     say("S2KF with L = " + std::to_string(samples) + ": " + cell(sweep.back().level_mm) + " mm, median " +
         cell(sweep.back().median_ms) + " ms per frame");
   }
-  const track::MethodResult& s2kf = sweep[static_cast<std::size_t>(
+  const evaluation::MethodResult& s2kf = sweep[static_cast<std::size_t>(
       std::find(sample_counts.begin(), sample_counts.end(), main_samples) - sample_counts.begin())];
-  const track::MethodResult baseline =
-      track::evaluate_method(setup, complete, track::Method::baseline, 0, truth_ptr, settings.warmup);
+  const evaluation::MethodResult baseline =
+      evaluation::evaluate_method(setup, complete, pipeline::Method::baseline, 0, truth_ptr, settings.warmup);
   say("baseline: " + cell(baseline.level_mm) + " mm, median " + cell(baseline.median_ms) + " ms per frame");
 
   // The reachable reference (simulated input only) and the smoothed S2KF, against the truth.
-  std::optional<track::TruthComparison> reference, smoothed, model_fit;
+  std::optional<evaluation::TruthComparison> reference, smoothed, model_fit;
   json true_subject_tracking = nullptr;
   json constant_placement = nullptr, at_true_poses = nullptr;
   json identifiable = json::array();
@@ -226,21 +226,21 @@ void run_evaluate(const EvaluateSettings& settings) {
   // occlusion; everything lands in the first bin without it).
   json error_by_time_hidden = nullptr;
   const auto hidden_time = [&](const io::MotionTable& motion) {
-    return hidden_time_json(track::hidden_time_error(setup.model, motion, *truth, complete.visible,
+    return hidden_time_json(evaluation::hidden_time_error(setup.model, motion, *truth, complete.visible,
                                                      setup.mapping, setup.rate_hz, settings.warmup));
   };
   if (truth) error_by_time_hidden = {{"s2kf", hidden_time(s2kf.run.motion)}};
   // The RTS-smoothed motion of a session over the whole recording.
-  const auto smoothed_motion = [&](const track::Session& session) {
+  const auto smoothed_motion = [&](const pipeline::Session& session) {
     SequenceFrameSource source(complete);
-    track::RunOptions run_options;
+    pipeline::RunOptions run_options;
     run_options.smooth = true;
-    return track::run_session(session, source, cached_sample_set(46, session.tracker.samples), run_options)
+    return pipeline::run_session(session, source, cached_sample_set(46, session.tracker.samples), run_options)
         .motion;
   };
   if (simulated) {
-    reference = track::compare_with_truth(setup.model,
-                                          track::true_subject_fit(simulated->subject, simulated->recording),
+    reference = evaluation::compare_with_truth(setup.model,
+                                          evaluation::true_subject_fit(simulated->subject, simulated->recording),
                                           *truth, settings.warmup);
     say("true-subject fit: segment orientation RMS " + cell(reference->segment_orientation_rms_deg) + " deg");
     identifiable = identifiable_references(setup, *simulated, *truth, settings.warmup);
@@ -256,21 +256,21 @@ void run_evaluate(const EvaluateSettings& settings) {
     if (setup.model.marker_names() == simulated->subject.model.marker_names()) {
       sim::Subject tracked_subject = simulated->subject;
       tracked_subject.model = setup.model;
-      model_fit = track::compare_with_truth(setup.model,
-                                            track::true_subject_fit(tracked_subject, simulated->recording),
+      model_fit = evaluation::compare_with_truth(setup.model,
+                                            evaluation::true_subject_fit(tracked_subject, simulated->recording),
                                             *truth, settings.warmup);
       say("tracker-model fit: segment orientation RMS " + cell(model_fit->segment_orientation_rms_deg) +
           " deg");
       // The tracker itself with the subject the simulation drew: what a perfect calibration would
       // give this filter (and its smoother), so the loss splits into calibration and filtering.
-      track::Session true_setup = setup;
+      pipeline::Session true_setup = setup;
       true_setup.model = simulated->subject.model;
-      const track::MethodResult with_true_subject = track::evaluate_method(
-          true_setup, complete, track::Method::s2kf, main_samples, truth_ptr, settings.warmup);
+      const evaluation::MethodResult with_true_subject = evaluation::evaluate_method(
+          true_setup, complete, pipeline::Method::s2kf, main_samples, truth_ptr, settings.warmup);
       true_subject_tracking = {{"s2kf", truth_json(*with_true_subject.truth)}};
       if (settings.smooth)
         true_subject_tracking["s2kf_smoothed"] = truth_json(
-            track::compare_with_truth(setup.model, smoothed_motion(true_setup), *truth, settings.warmup));
+            evaluation::compare_with_truth(setup.model, smoothed_motion(true_setup), *truth, settings.warmup));
       say("S2KF with the true subject: segment orientation RMS " +
           cell(true_subject_tracking["s2kf"]["segment_orientation_rms_deg"].get<double>()) + " deg");
     }
@@ -281,18 +281,18 @@ void run_evaluate(const EvaluateSettings& settings) {
   }
   if (settings.smooth && truth) {
     const io::MotionTable motion = smoothed_motion(setup);
-    smoothed = track::compare_with_truth(setup.model, motion, *truth, settings.warmup);
+    smoothed = evaluation::compare_with_truth(setup.model, motion, *truth, settings.warmup);
     error_by_time_hidden["s2kf_smoothed"] = hidden_time(motion);
     say("smoothed S2KF: segment orientation RMS " + cell(smoothed->segment_orientation_rms_deg) + " deg");
   }
 
   // The occlusion Monte Carlo.
-  track::OcclusionOptions occlusion_options;
+  evaluation::OcclusionOptions occlusion_options;
   occlusion_options.runs = settings.runs;
   occlusion_options.seed = settings.seed;
   occlusion_options.samples = main_samples;
-  const track::OcclusionStudy study =
-      track::occlusion_monte_carlo(setup, complete, occlusion_options, settings.warmup, [&](int run) {
+  const evaluation::OcclusionStudy study =
+      evaluation::occlusion_monte_carlo(setup, complete, occlusion_options, settings.warmup, [&](int run) {
         if (!progress) return;
         if (terminal)
           std::cerr << "\revaluate: occlusion run " << run + 1 << "/" << settings.runs << std::flush;
@@ -326,7 +326,7 @@ void run_evaluate(const EvaluateSettings& settings) {
       {"baseline_handling",
        "the baseline leaves hidden markers out of its least-squares fit (the paper's converter could not "
        "handle missing markers and was not run with occlusion)"}};
-  auto band_json = [&](const track::Band& band, const std::vector<double>& levels, double worst) {
+  auto band_json = [&](const evaluation::Band& band, const std::vector<double>& levels, double worst) {
     std::vector<double> after_max(
         band.max.begin() + std::min<long>(settings.warmup, static_cast<long>(band.max.size())),
         band.max.end());
@@ -390,8 +390,8 @@ void run_evaluate(const EvaluateSettings& settings) {
         if (reference) std::cout << " (true-subject fit " << cell(ref) << ")";
         std::cout << "\n";
       };
-      const track::TruthComparison& t = *s2kf.truth;
-      const track::TruthComparison r = reference ? *reference : track::TruthComparison{};
+      const evaluation::TruthComparison& t = *s2kf.truth;
+      const evaluation::TruthComparison r = reference ? *reference : evaluation::TruthComparison{};
       std::cout << "Against the truth after frame " << settings.warmup << ", S2KF:\n";
       beside("segment orientation RMS", t.segment_orientation_rms_deg, r.segment_orientation_rms_deg, "deg");
       beside("limb flexion RMS", t.limb_flexion_rms_deg, r.limb_flexion_rms_deg, "deg");

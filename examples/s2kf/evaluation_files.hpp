@@ -4,7 +4,7 @@
 /// drawn from them (the paper's Figs. 3, 4 and 7, the joint error, the sample sweep).
 #pragma once
 
-#include <s2kf/track/evaluation.hpp>
+#include <s2kf/evaluation/evaluation.hpp>
 
 #include <filesystem>
 #include <string>
@@ -16,10 +16,10 @@ namespace s2kf::cli {
 struct EvaluationSeries {
   double rate_hz;
   std::size_t frames;
-  const std::vector<track::MethodResult>& sweep;  ///< the S2KF at each sample count
-  const track::MethodResult& s2kf;                ///< the comparison's S2KF (one of `sweep`)
-  const track::MethodResult& baseline;
-  const track::OcclusionStudy& study;
+  const std::vector<evaluation::MethodResult>& sweep;  ///< the S2KF at each sample count
+  const evaluation::MethodResult& s2kf;                ///< the comparison's S2KF (one of `sweep`)
+  const evaluation::MethodResult& baseline;
+  const evaluation::OcclusionStudy& study;
   bool with_truth;  ///< the methods have per-frame joint errors
   long warmup;      ///< frames left out of the accuracy against the truth
 };

@@ -15,11 +15,11 @@
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/evaluation.hpp>
-#include <s2kf/track/hidden_time_error.hpp>
-#include <s2kf/track/identifiable_subject_reference.hpp>
-#include <s2kf/track/session.hpp>
-#include <s2kf/track/true_subject_reference.hpp>
+#include <s2kf/evaluation/evaluation.hpp>
+#include <s2kf/evaluation/hidden_time_error.hpp>
+#include <s2kf/evaluation/identifiable_subject_reference.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -65,18 +65,18 @@ namespace {
 /// What the default calibration works with on a simulated recording: its options (the marker
 /// weights of the set), the frames it adjusts and the model it starts from.
 struct DefaultCalibration {
-  track::CalibrationOptions options;
+  calibration::CalibrationOptions options;
   std::vector<long> frames;
   body::BodyModel nominal;
 };
 
-DefaultCalibration default_calibration(const track::Session& setup, const Simulated& simulated) {
-  const track::SessionOptions defaults;
+DefaultCalibration default_calibration(const pipeline::Session& setup, const Simulated& simulated) {
+  const pipeline::SessionOptions defaults;
   DefaultCalibration c;
   c.options = defaults.calibration;
-  c.options.marker_weight = track::calibration_weights(setup.marker_set, setup.tracker.marker_noise_mm);
-  c.frames = track::calibration_frame_indices(
-      track::calibration_stretches(simulated.recording.frames(), defaults.calibration_frames,
+  c.options.marker_weight = pipeline::calibration_weights(setup.marker_set, setup.tracker.marker_noise_mm);
+  c.frames = evaluation::calibration_frame_indices(
+      pipeline::calibration_stretches(simulated.recording.frames(), defaults.calibration_frames,
                                    defaults.calibration_windows),
       c.options);
   // The model the calibration starts from (prepare_session's, before the calibration).
@@ -87,21 +87,21 @@ DefaultCalibration default_calibration(const track::Session& setup, const Simula
 }
 
 /// The true-subject fit with `model` in place of the subject's, against the truth.
-track::TruthComparison fit_with(const body::BodyModel& model, const track::Session& setup,
+evaluation::TruthComparison fit_with(const body::BodyModel& model, const pipeline::Session& setup,
                                 const Simulated& simulated, const io::MotionTable& truth, long warmup) {
   sim::Subject subject = simulated.subject;
   subject.model = model;
-  return track::compare_with_truth(setup.model, track::true_subject_fit(subject, simulated.recording), truth,
+  return evaluation::compare_with_truth(setup.model, evaluation::true_subject_fit(subject, simulated.recording), truth,
                                    warmup);
 }
 
-bool same_markers(const track::Session& setup, const Simulated& simulated) {
+bool same_markers(const pipeline::Session& setup, const Simulated& simulated) {
   return setup.model.marker_names() == simulated.subject.model.marker_names() &&
          setup.model.joint_names() == simulated.subject.model.joint_names();
 }
 
-json identifiable_json(const track::IdentifiableSubject& identifiable, double fraction,
-                       const track::TruthComparison& fit) {
+json identifiable_json(const evaluation::IdentifiableSubject& identifiable, double fraction,
+                       const evaluation::TruthComparison& fit) {
   return {{"prior_only_fraction", std::isinf(fraction) ? json("nominal") : json(fraction)},
           {"information_ratio_threshold", number_or_null(identifiable.threshold)},
           {"reset_directions", identifiable.reset_directions},
@@ -112,15 +112,15 @@ json identifiable_json(const track::IdentifiableSubject& identifiable, double fr
 
 }  // namespace
 
-json identifiable_references(const track::Session& setup, const Simulated& simulated,
+json identifiable_references(const pipeline::Session& setup, const Simulated& simulated,
                              const io::MotionTable& truth, long warmup) {
   if (!same_markers(setup, simulated)) return json::array();  // no common unknowns to compare
   const DefaultCalibration c = default_calibration(setup, simulated);
   json references = json::array();
   for (const double fraction : {1e-5, 0.03, std::numeric_limits<double>::infinity()}) {
-    track::IdentifiableSubject identifiable;
+    evaluation::IdentifiableSubject identifiable;
     try {
-      identifiable = track::identifiable_subject(c.nominal, simulated.subject, simulated.recording, c.frames,
+      identifiable = evaluation::identifiable_subject(c.nominal, simulated.subject, simulated.recording, c.frames,
                                                  c.options, setup.tracker.marker_noise_mm, fraction);
     } catch (const std::invalid_argument&) {
       return json::array();  // no calibration frame to form the information from
@@ -131,16 +131,16 @@ json identifiable_references(const track::Session& setup, const Simulated& simul
   return references;
 }
 
-json constant_placement_reference(const track::Session& setup, const Simulated& simulated,
+json constant_placement_reference(const pipeline::Session& setup, const Simulated& simulated,
                                   const io::MotionTable& truth, long warmup) {
-  const sim::Subject constant = track::best_constant_placement(simulated.subject, simulated.recording);
+  const sim::Subject constant = evaluation::best_constant_placement(simulated.subject, simulated.recording);
   json reference = {{"truth", truth_json(fit_with(constant.model, setup, simulated, truth, warmup))},
                     {"identifiable", nullptr}};
   if (same_markers(setup, simulated)) {
     const DefaultCalibration c = default_calibration(setup, simulated);
     constexpr double kExactGauges = 1e-5;
-    const track::IdentifiableSubject identifiable =
-        track::identifiable_subject(c.nominal, constant, simulated.recording, c.frames, c.options,
+    const evaluation::IdentifiableSubject identifiable =
+        evaluation::identifiable_subject(c.nominal, constant, simulated.recording, c.frames, c.options,
                                     setup.tracker.marker_noise_mm, kExactGauges);
     reference["identifiable"] = identifiable_json(
         identifiable, kExactGauges, fit_with(identifiable.model, setup, simulated, truth, warmup));
@@ -148,16 +148,16 @@ json constant_placement_reference(const track::Session& setup, const Simulated& 
   return reference;
 }
 
-json calibration_at_true_poses_reference(const track::Session& setup, const Simulated& simulated,
+json calibration_at_true_poses_reference(const pipeline::Session& setup, const Simulated& simulated,
                                          const io::MotionTable& truth, long warmup) {
   if (!same_markers(setup, simulated)) return nullptr;
   const DefaultCalibration c = default_calibration(setup, simulated);
   std::vector<std::pair<long, body::Pose>> poses;
   for (long k : c.frames) poses.emplace_back(k, simulated.recording.truth[static_cast<std::size_t>(k)]);
-  const track::SubjectCalibration adjusted = track::adjust_subject_at_poses(
-      c.nominal, track::map_markers(simulated.recording.labels, c.nominal.marker_names()), setup.tracker,
+  const calibration::SubjectCalibration adjusted = calibration::adjust_subject_at_poses(
+      c.nominal, body::map_markers(simulated.recording.labels, c.nominal.marker_names()), setup.tracker,
       simulated.recording, poses, c.options);
-  const track::CalibrationPass& pass = adjusted.passes.front();
+  const calibration::CalibrationPass& pass = adjusted.passes.front();
   return {{"frames_used", pass.frames_used},
           {"bundle_iterations", pass.bundle_iterations},
           {"bundle_rms_before_mm", pass.rms_before_mm},

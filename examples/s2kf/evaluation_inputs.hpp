@@ -8,7 +8,7 @@
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -33,7 +33,7 @@ Simulated simulate_for_evaluation(const EvaluateSettings& settings);
 /// to the prior too; and "nominal", every direction reset: the nominal model itself, what
 /// calibrating can improve on. The frames and priors are the default calibration's; empty when
 /// the recording's marker set is not the model's.
-nlohmann::json identifiable_references(const track::Session& setup, const Simulated& simulated,
+nlohmann::json identifiable_references(const pipeline::Session& setup, const Simulated& simulated,
                                        const io::MotionTable& truth, long warmup);
 
 /// The best constant placement (best_constant_placement: each marker where the recording shows it
@@ -42,13 +42,13 @@ nlohmann::json identifiable_references(const track::Session& setup, const Simula
 /// known, soft tissue's average included in the placement. "identifiable": the same with its
 /// exact gauges (threshold 1e-5) reset to the marker set's, the most a calibration could recover
 /// of it; null when the recording's marker set is not the model's.
-nlohmann::json constant_placement_reference(const track::Session& setup, const Simulated& simulated,
+nlohmann::json constant_placement_reference(const pipeline::Session& setup, const Simulated& simulated,
                                             const io::MotionTable& truth, long warmup);
 
 /// The default calibration's bundle adjustment on its own frames, started at their true poses
 /// (adjust_subject_at_poses) instead of the tracker's, then the per-frame fit with that subject:
 /// where the calibration's objective itself lands. Null when the marker set is not the model's.
-nlohmann::json calibration_at_true_poses_reference(const track::Session& setup, const Simulated& simulated,
+nlohmann::json calibration_at_true_poses_reference(const pipeline::Session& setup, const Simulated& simulated,
                                                    const io::MotionTable& truth, long warmup);
 
 }  // namespace s2kf::cli

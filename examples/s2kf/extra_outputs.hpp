@@ -11,7 +11,7 @@
 #include <s2kf/io/motion_stream_writer.hpp>
 #include <s2kf/io/opensim_model.hpp>
 #include <s2kf/io/trc_file.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -117,7 +117,7 @@ inline void check_outputs(const OutputSettings& settings, const std::vector<std:
 
 /// The model markers that see a point of the recording (those the .osim and .trc carry).
 inline std::vector<std::string> used_marker_names(const body::BodyModel& model,
-                                                  const track::MarkerMapping& mapping) {
+                                                  const body::MarkerMapping& mapping) {
   std::vector<std::string> names;
   for (int m = 0; m < model.marker_count(); ++m)
     if (mapping.point_of_marker[static_cast<std::size_t>(m)] >= 0) names.push_back(model.markers[m].name);
@@ -129,7 +129,7 @@ inline std::vector<std::string> used_marker_names(const body::BodyModel& model,
 /// motion files when it finishes, and not at all when the run fails.
 inline void write_model_outputs(io::MotionStreamWriter& motion_files, const OutputSettings& settings,
                                 const std::string& prefix, const std::string& input,
-                                const body::BodyModel& model, const track::MarkerMapping& mapping) {
+                                const body::BodyModel& model, const body::MarkerMapping& mapping) {
   namespace fs = std::filesystem;
   const std::vector<std::string> markers = used_marker_names(model, mapping);
   const std::string name = fs::path(input).stem().string();
@@ -158,7 +158,7 @@ inline void write_model_outputs(io::MotionStreamWriter& motion_files, const Outp
 /// The OpenSim model of a calibrated subject (`s2kf calibrate --out SUBJECT.json` writes SUBJECT.osim),
 /// written to its temporary file; the caller commits it with the subject file.
 inline std::unique_ptr<io::AtomicFileWriter> prepare_subject_opensim_model(
-    const std::string& subject_path, const body::BodyModel& model, const track::MarkerMapping& mapping) {
+    const std::string& subject_path, const body::BodyModel& model, const body::MarkerMapping& mapping) {
   std::filesystem::path path = subject_path;
   path.replace_extension(".osim");
   auto file = std::make_unique<io::AtomicFileWriter>(path);

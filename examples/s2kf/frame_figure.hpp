@@ -9,7 +9,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/io/atomic_file.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 
 #include <Eigen/Core>
 
@@ -23,7 +23,7 @@ namespace s2kf::cli {
 /// Writes the data and draws it. `points`/`visible` are the frame as recorded (recording order).
 /// Returns false and says why in `problem` when no figure could be drawn (the data file is kept).
 inline bool draw_tracked_frame(const std::string& prefix, long frame, const body::BodyModel& model,
-                               const track::MarkerMapping& mapping, const body::Pose& pose,
+                               const body::MarkerMapping& mapping, const body::Pose& pose,
                                const Eigen::Matrix3Xd& points,
                                const Eigen::Array<bool, Eigen::Dynamic, 1>& visible, std::string& problem) {
   namespace fs = std::filesystem;

@@ -6,7 +6,7 @@
 
 #include <s2kf/io/number_text.hpp>
 #include <s2kf/track/segment_observation.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 
 #include <Eigen/Core>
 
@@ -40,7 +40,7 @@ inline void write_segment_report_header(std::ostream& out, const track::SegmentO
   for (const std::string& segment : segments.segments) out << "," << segment << "_sd_deg";
   out << "\n";
 }
-inline void write_segment_report_row(std::ostream& out, const track::Session& session,
+inline void write_segment_report_row(std::ostream& out, const pipeline::Session& session,
                                      const track::TrackedFrame& f) {
   Eigen::VectorXd sd = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(session.segments.segments.size()),
                                                  std::numeric_limits<double>::quiet_NaN());

@@ -1,5 +1,5 @@
 /// @file
-/// A marker set inferred from a C3D recording (track::infer_marker_set, with the bundled sets as
+/// A marker set inferred from a C3D recording (markerset::infer_marker_set, with the bundled sets as
 /// the places labs put markers), written as a marker-set file a person can read and correct: what
 /// `s2kf markerset infer` does, and what `s2kf track` falls back on when no bundled set names
 /// enough of a recording's labels.
@@ -12,7 +12,7 @@
 #include <s2kf/body/marker_set_labels.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/track/marker_set_inference.hpp>
+#include <s2kf/markerset/marker_set_inference.hpp>
 
 #include <cmath>
 #include <string>
@@ -27,7 +27,7 @@ inline constexpr int kInferenceSamples = 101;
 /// Infers a marker set for the recording at `input` and writes it to `out` (atomically). `up_axis`:
 /// 0-2, or -1 to find it. Throws UserError with one sentence when the recording cannot be read or
 /// its markers cannot be placed unambiguously.
-inline track::InferredMarkerSet infer_marker_set_file(const std::string& input, const std::string& out,
+inline markerset::InferredMarkerSet infer_marker_set_file(const std::string& input, const std::string& out,
                                                       int up_axis) {
   MarkerSequence recording;
   try {
@@ -35,14 +35,14 @@ inline track::InferredMarkerSet infer_marker_set_file(const std::string& input, 
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
-  track::MarkerSetInferenceOptions options;
+  markerset::MarkerSetInferenceOptions options;
   options.up_axis = up_axis;
   options.tracker.samples = kInferenceSamples;
   for (const std::string& name : bundled_marker_set_names())
     options.known_sets.push_back(resolve_marker_set(name));
-  track::InferredMarkerSet inferred;
+  markerset::InferredMarkerSet inferred;
   try {
-    inferred = track::infer_marker_set(recording, cached_sample_set(46, kInferenceSamples), options);
+    inferred = markerset::infer_marker_set(recording, cached_sample_set(46, kInferenceSamples), options);
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": no marker set can be inferred: " + e.what());
   }
@@ -58,7 +58,7 @@ inline track::InferredMarkerSet infer_marker_set_file(const std::string& input, 
 /// them as the tracker needs to start (8). Not a fraction of the labels: Vicon files carry dozens
 /// of virtual points (PELO, LTIO, ...) beside the markers.
 inline bool bundled_set_fits(const std::vector<std::string>& labels, const body::MarkerSet& set) {
-  return track::map_marker_set(labels, set).markers_used() >= track::TrackerOptions{}.min_markers_to_start;
+  return body::map_marker_set(labels, set).markers_used() >= track::TrackerOptions{}.min_markers_to_start;
 }
 
 /// choose_marker_set_for, and when neither option names a set and no bundled set fits the labels,
@@ -70,14 +70,14 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
   if (!markerset.empty() || !subject.empty()) return choose_marker_set_for(labels, markerset, subject);
   std::vector<body::MarkerSet> sets;
   for (const std::string& name : bundled_marker_set_names()) sets.push_back(resolve_marker_set(name));
-  const int best = track::choose_marker_set(labels, sets);
+  const int best = body::choose_marker_set(labels, sets);
   if (best >= 0 && bundled_set_fits(labels, sets[static_cast<std::size_t>(best)]))
     return choose_marker_set_for(labels, markerset, subject);
   const std::string bundled_problem =
       best < 0 ? std::string("none of the recording's labels belongs to a bundled marker set")
                : "no bundled marker set names 8 of the recording's labels (best: " +
                      sets[static_cast<std::size_t>(best)].name + ")";
-  track::InferredMarkerSet inferred;
+  markerset::InferredMarkerSet inferred;
   try {
     inferred = infer_marker_set_file(input, inferred_path, -1);
   } catch (const UserError& e) {
@@ -94,9 +94,9 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
            ? std::string("none")
            : sets[static_cast<std::size_t>(best)].name + " with " +
                  std::to_string(
-                     track::map_marker_set(labels, sets[static_cast<std::size_t>(best)]).markers_used())) +
+                     body::map_marker_set(labels, sets[static_cast<std::size_t>(best)]).markers_used())) +
       "); written to " + inferred_path + "; " + inferred.notes.front() + "; confidence per segment:";
-  for (const track::InferredSegment& s : inferred.segments)
+  for (const markerset::InferredSegment& s : inferred.segments)
     choice.source += " " + s.segment + " " + std::to_string(std::lround(100 * s.confidence)) + " %";
   return choice;
 }

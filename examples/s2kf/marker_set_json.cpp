@@ -201,7 +201,7 @@ MarkerSetChoice choose_marker_set_for(const std::vector<std::string>& labels, co
   } else {
     std::vector<body::MarkerSet> sets;
     for (const std::string& name : bundled_marker_set_names()) sets.push_back(resolve_marker_set(name));
-    const int best = track::choose_marker_set(labels, sets);
+    const int best = body::choose_marker_set(labels, sets);
     if (best < 0)
       throw UserError("none of the recording's labels belongs to a bundled marker set; give --markerset");
     choice.set = sets[static_cast<std::size_t>(best)];
@@ -215,7 +215,7 @@ MarkerSetChoice choose_marker_set_for(const std::vector<std::string>& labels, co
 }
 
 std::vector<std::string> marker_set_messages(const MarkerSetChoice& choice,
-                                             const track::MarkerMapping& mapping) {
+                                             const body::MarkerMapping& mapping) {
   std::vector<std::string> messages;
   messages.push_back("marker set " + choice.set.name + " (" + choice.source +
                      "): " + std::to_string(mapping.markers_used()) + " of its " +

@@ -8,8 +8,8 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
-#include <s2kf/track/marker_set_mapping.hpp>
-#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -62,7 +62,7 @@ MarkerSetChoice choose_marker_set_for(const std::vector<std::string>& labels, co
 /// What to tell the user about the choice once the session mapped the labels: which set, why, how
 /// many of its markers the recording has, which labels were ignored.
 std::vector<std::string> marker_set_messages(const MarkerSetChoice& choice,
-                                             const track::MarkerMapping& mapping);
+                                             const body::MarkerMapping& mapping);
 
 /// A calibrated subject as a marker set: explicit frames and offsets at the reference height
 /// (1000 mm), the subject's height and the bone-length factors relative to the scaled model, and

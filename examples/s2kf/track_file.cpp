@@ -19,10 +19,10 @@
 #include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -110,7 +110,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
 
   const MarkerSetChoice choice = choose_or_infer_marker_set(input, source->labels(), settings.markerset,
                                                             settings.subject, prefix + "_markerset.json");
-  track::SessionOptions session_options;
+  pipeline::SessionOptions session_options;
   try {
     session_options.tracker = track::preset_options(settings.preset, info.rate);
   } catch (const std::invalid_argument& e) {
@@ -130,9 +130,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   if (session_options.calibrate && settings.calibration_samples > 0 &&
       settings.calibration_samples != session_options.tracker.samples)
     session_options.calibration_samples = cached_sample_set(46, settings.calibration_samples);
-  track::Session session;
+  pipeline::Session session;
   try {
-    session = track::prepare_session(*source, choice.set, session_options, samples);
+    session = pipeline::prepare_session(*source, choice.set, session_options, samples);
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": " + e.what());
   }
@@ -156,7 +156,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   const double frame_period = 1.0 / info.rate;
   long deadline_misses = 0;
   c3d::Frame figure_points;  // the frame --figure draws, as recorded
-  track::RunHooks hooks;
+  pipeline::RunHooks hooks;
   hooks.on_read = [&](const MarkerFrame& frame) {
     throw_if_interrupted();
     if (frame.index == settings.figure_frame) figure_points = frame;
@@ -205,12 +205,12 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     if (f.frame == settings.figure_frame && io::is_tracked_row(f.values))
       figure_pose = body::pose_from_row(f.values);
   };
-  track::RunOptions run_options;
-  run_options.method = settings.method == "s2kf" ? track::Method::s2kf : track::Method::baseline;
+  pipeline::RunOptions run_options;
+  run_options.method = settings.method == "s2kf" ? pipeline::Method::s2kf : pipeline::Method::baseline;
   run_options.smooth = settings.smooth;
   track::TrackingRun run;
   try {
-    run = track::run_session(session, *source, samples, run_options, hooks);
+    run = pipeline::run_session(session, *source, samples, run_options, hooks);
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": " + e.what());
   }
@@ -240,10 +240,10 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
 
   // Accuracy against the truth, from the motion as written (frames from the 20th on), read back
   // before the set is committed.
-  std::optional<track::TruthComparison> accuracy;
+  std::optional<evaluation::TruthComparison> accuracy;
   if (truth) {
     try {
-      accuracy = track::compare_with_truth(session.model, io::load_motion_csv(motion_files.flushed_csv()),
+      accuracy = evaluation::compare_with_truth(session.model, io::load_motion_csv(motion_files.flushed_csv()),
                                            *truth, kTruthWarmupFrames);
     } catch (const std::invalid_argument& e) {
       throw UserError("--truth: " + settings.truth + ": " + e.what());

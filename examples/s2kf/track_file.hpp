@@ -5,7 +5,7 @@
 
 #include "extra_outputs.hpp"
 
-#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -29,7 +29,7 @@ struct TrackSettings {
   double static_sd_deg = 3.0;  // --static-sd
   bool calibrate = true;       // calibrate the subject on the recording first (not with --subject)
   int calibration_frames = 1200;
-  double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
+  double calibration_shrink = calibration::CalibrationOptions{}.weak_direction_shrink;
   bool noise_from_calibration = true;  // false: --uniform-noise
   int calibration_samples = 0;         // the calibration's tracking pass; 0: the tracker's samples
   int calibration_threads = 1;         // set by run_track: every core for one recording, 1 in a batch

@@ -20,7 +20,7 @@ double summary_number(const nlohmann::json& value) {
 
 nlohmann::json track_summary(const std::string& input, const std::string& method,
                              const MarkerSetChoice& choice, const std::vector<std::string>& messages,
-                             const track::Session& session, const track::TrackingRun& run, bool smoothed,
+                             const pipeline::Session& session, const track::TrackingRun& run, bool smoothed,
                              const std::vector<std::string>& warnings, double calibration_shrink,
                              const track::StageTimes& outside) {
   // Converged where the running median over the next second falls below 1.5 times the
@@ -37,7 +37,7 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
         {"samples", session.calibration_sample_count},
         {"stretches", session.calibration_stretches},
         {"mean_marker_distance_before_mm", session.calibration->mean_marker_distance_before_mm},
-        {"mean_marker_distance_after_mm", number_or_null(track::calibrated_distance_mm(session, run))},
+        {"mean_marker_distance_after_mm", number_or_null(pipeline::calibrated_distance_mm(session, run))},
         {"segment_scale", session.calibration->segment_scale},
         {"bundle_frames", session.calibration->passes.front().frames_used},
         {"bundle_iterations", session.calibration->passes.front().bundle_iterations},
@@ -125,7 +125,7 @@ std::string fixed_text(double value, int precision) {
   return s.str();
 }
 
-nlohmann::json truth_json(const track::TruthComparison& t) {
+nlohmann::json truth_json(const evaluation::TruthComparison& t) {
   nlohmann::json segments = nlohmann::json::object();
   for (const auto& [name, rms] : t.segment_rms_deg) segments[name] = number_or_null(rms);
   return {{"frames_compared", t.frames},

@@ -6,9 +6,9 @@
 
 #include "marker_set_json.hpp"
 
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -33,7 +33,7 @@ double summary_number(const nlohmann::json& value);
 /// only it knows (deadline misses, the truth).
 nlohmann::json track_summary(const std::string& input, const std::string& method,
                              const MarkerSetChoice& choice, const std::vector<std::string>& messages,
-                             const track::Session& session, const track::TrackingRun& run, bool smoothed,
+                             const pipeline::Session& session, const track::TrackingRun& run, bool smoothed,
                              const std::vector<std::string>& warnings, double calibration_shrink,
                              const track::StageTimes& outside = {});
 
@@ -41,7 +41,7 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
 std::string fixed_text(double value, int precision);
 
 /// The accuracy against a simulated recording's truth, as the summary's "truth" object.
-nlohmann::json truth_json(const track::TruthComparison& t);
+nlohmann::json truth_json(const evaluation::TruthComparison& t);
 
 /// What `s2kf track` prints about a tracked recording, read from its summary (so the text and
 /// PREFIX.json never disagree): the marker set's messages, then one paragraph of frames, markers,

@@ -1,7 +1,7 @@
 // The program's one use of the sample cache (see tracker_samples.hpp).
 #include "tracker_samples.hpp"
 
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/sample_cache.hpp>
 
 namespace s2kf::cli {
 

@@ -7,8 +7,8 @@
 #include "numpy_bridge.hpp"
 
 #include <s2kf/body/body_model.hpp>
-#include <s2kf/core/sample_cache.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/io/sample_cache.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 
@@ -22,7 +22,7 @@ namespace s2kf::python {
 
 class StreamingTracker {
  public:
-  StreamingTracker(body::BodyModel model, track::MarkerMapping mapping, track::TrackerOptions options,
+  StreamingTracker(body::BodyModel model, body::MarkerMapping mapping, track::TrackerOptions options,
                    double rate, const SampleSet& samples, Eigen::Index point_count) {
     tracker_ = std::make_unique<track::Tracker>(std::move(model), std::move(mapping), std::move(options),
                                                 rate, samples);
@@ -65,7 +65,7 @@ inline std::unique_ptr<StreamingTracker> streaming_tracker_for_labels(const std:
   if (!(rate > 0) || !std::isfinite(rate))
     throw py::value_error("the frame rate must be a positive number of Hz, got " + std::to_string(rate));
   model.validate();
-  track::MarkerMapping mapping = track::map_markers(labels, model.marker_names());
+  body::MarkerMapping mapping = body::map_markers(labels, model.marker_names());
   if (mapping.markers_used() == 0)
     throw py::value_error("none of the " + std::to_string(labels.size()) +
                           " labels is a marker of the body model (expected names such as LASI, RKNE, C7)");

@@ -1,5 +1,5 @@
 /// @file
-/// s2kf.track: a whole recording through the library's pipeline (track/session.hpp: marker-set
+/// s2kf.track: a whole recording through the library's pipeline (pipeline/session.hpp: marker-set
 /// choice, height, subject calibration, tracker, optional smoothing) exactly as `s2kf track` runs it,
 /// with the same summary; and s2kf.TrackResult, the motion as numpy views with the program's
 /// writers (.csv, .mot, .bvh, .json, _markers.csv).
@@ -12,13 +12,13 @@
 
 #include "command.hpp"  // examples/s2kf: the program's error type, cli::UserError
 
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/bvh.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 
 #include <pybind11/stl.h>
@@ -350,7 +350,7 @@ void bind_track(py::module_& module) {
       py::arg("recording"), py::arg("labels") = py::none(), py::arg("rate") = py::none(), py::kw_only(),
       py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("static") = py::none(),
       py::arg("static_sd") = 3.0, py::arg("calibrate") = true, py::arg("calibration_frames") = 1200,
-      py::arg("calibration_shrink") = track::CalibrationOptions{}.weak_direction_shrink,
+      py::arg("calibration_shrink") = calibration::CalibrationOptions{}.weak_direction_shrink,
       py::arg("uniform_noise") = false, py::arg("smooth") = false, py::arg("samples") = 301,
       py::arg("height_mm") = 0.0, py::arg("preset") = "default", py::arg("gain") = "information-form",
       py::arg("method") = "s2kf", py::arg("model_output") = py::none(), py::arg("name") = py::none(),

@@ -5,7 +5,7 @@
 #include "marker_set_json.hpp"     // examples/s2kf: bundled marker sets, the automatic choice, messages
 #include "track_summary.hpp"       // examples/s2kf: the summary `s2kf track` writes
 
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
 
 #include <memory>
@@ -56,7 +56,7 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   } else {
     choice = cli::choose_marker_set_for(source.labels(), settings.markerset, settings.subject);
   }
-  track::SessionOptions session_options;
+  pipeline::SessionOptions session_options;
   try {
     session_options.tracker = track::preset_options(settings.preset, source.rate_hz());
     track::set_gain_from_name(session_options.tracker, settings.gain);
@@ -72,9 +72,9 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
 
   result->name = name;
   result->point_count = static_cast<Eigen::Index>(source.labels().size());
-  track::Session& session = result->session;
+  pipeline::Session& session = result->session;
   try {
-    session = track::prepare_session(source, choice.set, session_options, result->samples);
+    session = pipeline::prepare_session(source, choice.set, session_options, result->samples);
   } catch (const std::invalid_argument& e) {
     throw cli::UserError(input + ": " + e.what());
   }
@@ -90,12 +90,12 @@ std::unique_ptr<TrackResult> run_pipeline(FrameSource& source, const std::string
   warnings.insert(warnings.end(), session.warnings.begin(), session.warnings.end());
   result->messages = cli::marker_set_messages(choice, session.mapping);
 
-  track::RunOptions run_options;
-  run_options.method = settings.method == "s2kf" ? track::Method::s2kf : track::Method::baseline;
+  pipeline::RunOptions run_options;
+  run_options.method = settings.method == "s2kf" ? pipeline::Method::s2kf : pipeline::Method::baseline;
   run_options.smooth = settings.smooth;
   track::TrackingRun& run = result->run;
   try {
-    run = track::run_session(session, source, result->samples, run_options);
+    run = pipeline::run_session(session, source, result->samples, run_options);
   } catch (const std::invalid_argument& e) {
     throw cli::UserError(input + ": " + e.what());
   }

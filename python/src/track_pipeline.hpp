@@ -5,8 +5,8 @@
 
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
-#include <s2kf/track/session.hpp>
-#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/track/tracking_run.hpp>
 
 #include <nlohmann/json.hpp>
@@ -25,7 +25,7 @@ struct TrackSettings {
   double static_sd_deg = 3.0;  // how far each joint may be from the zero pose there
   bool calibrate = true;
   std::int64_t calibration_frames = 1200;
-  double calibration_shrink = track::CalibrationOptions{}.weak_direction_shrink;
+  double calibration_shrink = calibration::CalibrationOptions{}.weak_direction_shrink;
   bool uniform_noise = false;  // true: every marker the tracker's noise (else from the calibration)
   bool smooth = false;
   int samples = 301;
@@ -38,7 +38,7 @@ struct TrackSettings {
 /// A tracked recording: the session it was tracked with, the run, and the program's summary.
 struct TrackResult {
   std::string name;  // the .mot file's first line: the recording's file stem
-  track::Session session;
+  pipeline::Session session;
   track::TrackingRun run;
   SampleSet samples;
   std::vector<std::string> messages;

@@ -10,10 +10,10 @@
 #include "marker_set_json.hpp"  // examples/s2kf: bundled marker sets and marker-set files
 
 #include <s2kf/body/body_model.hpp>
-#include <s2kf/core/sample_cache.hpp>
-#include <s2kf/track/marker_mapping.hpp>
-#include <s2kf/track/marker_set_mapping.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/io/sample_cache.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 
@@ -28,13 +28,13 @@ namespace s2kf::python {
 namespace {
 
 /// A tracker whose model carries a marker set (bundled name or file), as the pipeline builds it
-/// (track::prepare_session): the set applied to the model at its reference height, scaled to the
+/// (pipeline::prepare_session): the set applied to the model at its reference height, scaled to the
 /// subject, labels mapped by the set's labels and aliases, the set's per-marker noise.
 std::unique_ptr<StreamingTracker> streaming_tracker_for_marker_set(const std::vector<std::string>& labels,
                                                                    double rate, const std::string& markerset,
                                                                    double height_mm,
                                                                    track::TrackerOptions options) {
-  if (!track::plausible_height_mm(height_mm))
+  if (!pipeline::plausible_height_mm(height_mm))
     throw py::value_error("height_mm must lie between 300 and 3000, got " + number_text(height_mm));
   body::MarkerSet set;
   try {
@@ -43,13 +43,13 @@ std::unique_ptr<StreamingTracker> streaming_tracker_for_marker_set(const std::ve
     throw py::value_error(e.what());
   }
   const body::BodyModel model = body::apply_marker_set(body::mmm_body_model(set.reference_height_mm), set);
-  const track::MarkerMapping mapping = track::map_marker_set(labels, set);
+  const body::MarkerMapping mapping = body::map_marker_set(labels, set);
   if (mapping.markers_used() == 0)
     throw py::value_error("none of the " + std::to_string(labels.size()) +
                           " labels is a marker of the marker set " + set.name);
   if (!(rate > 0) || !std::isfinite(rate))
     throw py::value_error("the frame rate must be a positive number of Hz, got " + number_text(rate));
-  options.marker_noise_mm_per_marker = track::marker_noise_of(set);
+  options.marker_noise_mm_per_marker = pipeline::marker_noise_of(set);
   py::gil_scoped_release unlocked;
   const SampleSet samples = lcd_sample_set(model.joint_count() + 6, options.samples).set;
   return std::make_unique<StreamingTracker>(model.scaled(height_mm), mapping, std::move(options), rate,

@@ -10,14 +10,14 @@
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/evaluation.hpp>
+#include <s2kf/evaluation/evaluation.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/true_subject_reference.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "../../examples/s2kf/marker_set_json.hpp"
 #include "../../examples/s2kf/motion_json.hpp"
@@ -89,12 +89,12 @@ TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
 
   // The numbers are the library's for the same input.
   const MarkerSequence recording = bundled_handstand(60);
-  const track::Session setup = evaluation_session(recording);
-  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
-  const track::MethodResult s2kf =
-      track::evaluate_method(setup, recording, track::Method::s2kf, 93, &truth, 20);
-  const track::MethodResult baseline =
-      track::evaluate_method(setup, recording, track::Method::baseline, 0, &truth, 20);
+  const pipeline::Session setup = evaluation_session(recording);
+  const io::MotionTable truth = evaluation::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
+  const evaluation::MethodResult s2kf =
+      evaluation::evaluate_method(setup, recording, pipeline::Method::s2kf, 93, &truth, 20);
+  const evaluation::MethodResult baseline =
+      evaluation::evaluate_method(setup, recording, pipeline::Method::baseline, 0, &truth, 20);
   EXPECT_NEAR(json_number(summary, "mean_marker_distance_mm", "s2kf"), s2kf.level_mm, 1e-9 * s2kf.level_mm);
   EXPECT_NEAR(json_number(summary, "mean_marker_distance_mm", "baseline"), baseline.level_mm,
               1e-9 * baseline.level_mm);
@@ -163,8 +163,8 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
   recording_options.frames = 80;
   const sim::Recording recording = sim::simulate_recording(
       cli::load_motion_file(data_file("motions/walk.json"), joints, 2), subject, recording_options, 2);
-  const track::TruthComparison expected =
-      track::compare_with_truth(subject.model, track::true_subject_fit(subject, recording),
+  const evaluation::TruthComparison expected =
+      evaluation::compare_with_truth(subject.model, evaluation::true_subject_fit(subject, recording),
                                 sim::truth_motion(recording, subject.joint_names), 20);
   const double reference = json_number(summary, "segment_orientation_rms_deg", "true_subject_reference");
   EXPECT_NEAR(reference, expected.segment_orientation_rms_deg, 1e-6);
@@ -187,8 +187,8 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
   EXPECT_GT(identifiable[0]["truth"]["segment_orientation_rms_deg"].get<double>(), 0.1);
   // The best constant placement: the library's, on the same subject and recording; and its
   // identifiable part, whose gauges go back to the marker set's, is no better.
-  const track::TruthComparison constant = track::compare_with_truth(
-      subject.model, track::true_subject_fit(track::best_constant_placement(subject, recording), recording),
+  const evaluation::TruthComparison constant = evaluation::compare_with_truth(
+      subject.model, evaluation::true_subject_fit(evaluation::best_constant_placement(subject, recording), recording),
       sim::truth_motion(recording, subject.joint_names), 20);
   const nlohmann::json& placement = parsed["constant_placement_reference"];
   EXPECT_NEAR(placement["truth"]["segment_orientation_rms_deg"].get<double>(),
@@ -206,18 +206,18 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
   EXPECT_GT(at_true_poses["truth"]["segment_orientation_rms_deg"].get<double>(), 0.1);
   // The tracker with the subject the simulation drew: the library's S2KF on the session evaluate
   // prepares (the marker set its labels choose, no calibration), with the true model in its place.
-  track::Session session;
+  pipeline::Session session;
   {
     SequenceFrameSource source(recording);
-    track::SessionOptions session_options;
+    pipeline::SessionOptions session_options;
     session_options.calibrate = false;
-    session = track::prepare_session(source, cli::choose_marker_set_for(recording.labels, "", "").set,
+    session = pipeline::prepare_session(source, cli::choose_marker_set_for(recording.labels, "", "").set,
                                      session_options, test::tracker_samples());
   }
   session.model = subject.model;
   const io::MotionTable true_motion = sim::truth_motion(recording, subject.joint_names);
-  const track::MethodResult with_true_subject =
-      track::evaluate_method(session, recording, track::Method::s2kf, 93, &true_motion, 20);
+  const evaluation::MethodResult with_true_subject =
+      evaluation::evaluate_method(session, recording, pipeline::Method::s2kf, 93, &true_motion, 20);
   const nlohmann::json& true_tracking = parsed["true_subject_tracking_reference"];
   EXPECT_NEAR(true_tracking["s2kf"]["segment_orientation_rms_deg"].get<double>(),
               with_true_subject.truth->segment_orientation_rms_deg, 1e-9);

@@ -6,7 +6,7 @@
 #include "../cli_runner.hpp"
 #include "motion_test_support.hpp"
 
-#include <s2kf/core/label_text.hpp>
+#include <s2kf/body/label_text.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/c3d_writer.hpp>
 

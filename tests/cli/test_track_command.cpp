@@ -9,12 +9,12 @@
 #include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "cli_runner.hpp"
 
@@ -260,8 +260,8 @@ TEST(TrackCommand, ReportsTheAccuracyAgainstAGivenTruth) {
   EXPECT_NE(r.output.find("Against the truth (frames 20 on): all-joint RMS"), std::string::npos) << r.output;
   // The summary's numbers are the library's comparison of the written motion with the truth.
   const auto summary = nlohmann::json::parse(read_text(out.string() + ".json"));
-  const track::TruthComparison t =
-      track::compare_with_truth(body::mmm_body_model(1750), io::load_motion_csv(out.string() + ".csv"),
+  const evaluation::TruthComparison t =
+      evaluation::compare_with_truth(body::mmm_body_model(1750), io::load_motion_csv(out.string() + ".csv"),
                                 io::load_motion_csv(data_file("walk_truth.csv")), 20);
   ASSERT_TRUE(summary.contains("truth")) << summary.dump(2);
   EXPECT_EQ(summary["truth"]["all_joint_rms_deg"].get<double>(), t.all_joint_rms_deg);
@@ -298,7 +298,7 @@ TEST(TrackCommand, TracksWithACalibratedSubjectFileAndSmooths) {
   const auto truth = io::load_motion_csv(data_file("walk_truth.csv"));
   ASSERT_EQ(motion.frames(), truth.frames());
   const body::BodyModel model = body::mmm_body_model(1750);
-  const track::TruthComparison t = track::compare_with_truth(model, motion, truth, 20);
+  const evaluation::TruthComparison t = evaluation::compare_with_truth(model, motion, truth, 20);
   EXPECT_EQ(t.joint_limit_violations, 0);
   EXPECT_LT(t.limb_flexion_rms_deg, 4.0);  // measured 2.7 with the marker set alone, smoothed
 }

@@ -1,6 +1,6 @@
 // Text from files as UTF-8 (issue 16): C3D labels, units and parameter names are bytes, usually
 // ASCII or Latin-1; the outputs (JSON, CSV) need UTF-8.
-#include <s2kf/core/label_text.hpp>
+#include <s2kf/body/label_text.hpp>
 
 #include <gtest/gtest.h>
 

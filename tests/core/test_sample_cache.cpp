@@ -1,6 +1,6 @@
 // The disk cache of LCD sample sets: bit-identical round trip, and every kind of bad file is
 // recomputed and rewritten, never used.
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/sample_cache.hpp>
 
 #include <gtest/gtest.h>
 

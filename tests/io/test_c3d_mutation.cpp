@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "s2kf/core/label_text.hpp"
+#include "s2kf/body/label_text.hpp"
 #include "s2kf/io/c3d_reader.hpp"
 
 namespace {

@@ -5,8 +5,8 @@
 // (and counted) there, as tests/body does; the full malloc count runs in the ordinary builds.
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include "tracker_samples.hpp"
@@ -123,8 +123,8 @@ void expect_steady_state_frames_to_allocate_nothing(const track::TrackerOptions&
   std::vector<std::string> labels;
   for (const auto& label : recording.info.labels) labels.push_back(label.name);
   body::BodyModel model = body::mmm_body_model(1000);
-  const track::MarkerMapping mapping = track::map_markers(labels, model.marker_names());
-  track::HeightEstimator heights(model, mapping);
+  const body::MarkerMapping mapping = body::map_markers(labels, model.marker_names());
+  calibration::HeightEstimator heights(model, mapping);
   for (Eigen::Index f = 0; f < recording.frame_count(); f += 10)
     heights.add_frame(recording.frame(f), recording.visible.col(f));
   model = model.scaled(heights.height_mm().value_or(1750));

@@ -13,8 +13,8 @@
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
 #include <s2kf/track/segment_observation.hpp>
-#include <s2kf/track/session.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "tracker_samples.hpp"
 
@@ -68,21 +68,21 @@ SetRecording simulate_with(const body::MarkerSet& set, std::uint64_t seed,
 }
 
 struct SetTracked {
-  track::Session session;
+  pipeline::Session session;
   track::TrackingRun run;
-  track::TruthComparison accuracy;
+  evaluation::TruthComparison accuracy;
   std::vector<Eigen::VectorXd> last_uncertainty;  // segment_uncertainty_deg of the last frame
 };
 
 SetTracked track_simulated(const SetRecording& s, const body::MarkerSet& set) {
   SequenceFrameSource source(s.recording);
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   options.tracker = track::preset_options("default", 100.0);
   options.calibration_frames = 400;
   const SampleSet& samples = test::tracker_samples(options.tracker);
   SetTracked t;
-  t.session = track::prepare_session(source, set, options, samples);
-  track::RunHooks hooks;
+  t.session = pipeline::prepare_session(source, set, options, samples);
+  pipeline::RunHooks hooks;
   io::MotionTable motion;
   motion.joint_names = t.session.model.joint_names();
   std::vector<double> rows;
@@ -94,12 +94,12 @@ SetTracked track_simulated(const SetRecording& s, const body::MarkerSet& set) {
       t.last_uncertainty = {track::segment_uncertainty_deg(t.session.model, t.session.segments,
                                                            f.estimate->pose.joints, f.estimate->covariance)};
   };
-  t.run = track::run_session(t.session, source, samples, {}, hooks);
+  t.run = pipeline::run_session(t.session, source, samples, {}, hooks);
   const Eigen::Index columns = body::kRootValues + t.session.model.joint_count();
   motion.values = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       rows.data(), static_cast<Eigen::Index>(motion.frame.size()), columns);
   t.run.motion = motion;
-  t.accuracy = track::compare_with_truth(t.session.model, motion, s.truth, 20);
+  t.accuracy = evaluation::compare_with_truth(t.session.model, motion, s.truth, 20);
   return t;
 }
 
@@ -169,7 +169,7 @@ TEST(PartialMarkerSets, LowerBodyRecordingWritesTheUpperBodyAsNotObserved) {
   const SetRecording s = simulate_with(set, 9);
   // The automatic choice takes the lower-body set, not the full one it is half of.
   const std::vector<body::MarkerSet> sets{cli::resolve_marker_set("plugin_gait"), set};
-  EXPECT_EQ(track::choose_marker_set(s.recording.labels, sets), 1);
+  EXPECT_EQ(body::choose_marker_set(s.recording.labels, sets), 1);
   const SetTracked t = track_simulated(s, set);
   EXPECT_EQ(t.session.segments.unobserved_segments(),
             (std::vector<std::string>{"BP", "BT", "BLN", "BUN", "LS", "LE", "LW", "RS", "RE", "RW"}));
@@ -242,9 +242,9 @@ TEST(PartialMarkerSets, PelvisOnlyIsRefused) {
   }
   const SetRecording s = simulate_with(pelvis, 3);
   SequenceFrameSource source(s.recording);
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   try {
-    track::prepare_session(source, pelvis, options, test::tracker_samples());
+    pipeline::prepare_session(source, pelvis, options, test::tracker_samples());
     FAIL() << "a pelvis-only recording was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("only the pelvis carries markers"), std::string::npos) << e.what();

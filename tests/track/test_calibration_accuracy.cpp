@@ -12,11 +12,11 @@
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/marker_mapping.hpp>
-#include <s2kf/track/session.hpp>
-#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "address_sanitizer.hpp"
 #include "sweep_recording.hpp"
@@ -35,28 +35,28 @@ using namespace s2kf;
 /// Tracks `recording` as `s2kf track` does with the model's own marker set (the KIT markers all
 /// these recordings carry), calibrated or not, and compares the motion with the truth after 20
 /// frames.
-track::TruthComparison track_against_truth(const MarkerSequence& recording, const io::MotionTable& truth,
+evaluation::TruthComparison track_against_truth(const MarkerSequence& recording, const io::MotionTable& truth,
                                            bool calibrate, double prior_only_fraction) {
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   options.calibrate = calibrate;
   options.calibration.prior_only_fraction = prior_only_fraction;
   const SampleSet& samples = test::tracker_samples(options.tracker);
   SequenceFrameSource source(recording);
-  const track::Session session =
-      track::prepare_session(source, body::model_marker_set(body::mmm_body_model(1000)), options, samples);
+  const pipeline::Session session =
+      pipeline::prepare_session(source, body::model_marker_set(body::mmm_body_model(1000)), options, samples);
   SequenceFrameSource again(recording);
-  const track::TrackingRun run = track::run_session(session, again, samples, {});
-  return track::compare_with_truth(session.model, run.motion, truth, 20);
+  const track::TrackingRun run = pipeline::run_session(session, again, samples, {});
+  return evaluation::compare_with_truth(session.model, run.motion, truth, 20);
 }
 
 /// No calibration, the default calibration, and the gauge-aware one (prior_only_fraction 0.3).
 struct Verdict {
-  track::TruthComparison plain, calibrated, gauge_aware;
+  evaluation::TruthComparison plain, calibrated, gauge_aware;
 };
 
 Verdict compare(const std::string& name, const MarkerSequence& recording, const io::MotionTable& truth) {
   Verdict v{track_against_truth(recording, truth, false, 0),
-            track_against_truth(recording, truth, true, track::CalibrationOptions{}.prior_only_fraction),
+            track_against_truth(recording, truth, true, calibration::CalibrationOptions{}.prior_only_fraction),
             track_against_truth(recording, truth, true, 0.3)};
   std::printf(
       "%s: segments %.2f / %.2f / %.2f deg, limb flexion %.2f / %.2f / %.2f deg (no calibration / "
@@ -98,7 +98,7 @@ TEST_P(CalibrationMet, CalibrationDoesNotMakeTheJointsWorse) {
   const io::MotionTable truth = io::load_motion_csv(base + "_truth.csv");
   Verdict v;
   v.plain = track_against_truth(recording, truth, false, 0);
-  v.calibrated = track_against_truth(recording, truth, true, track::CalibrationOptions{}.prior_only_fraction);
+  v.calibrated = track_against_truth(recording, truth, true, calibration::CalibrationOptions{}.prior_only_fraction);
   expect_not_worse_than_no_calibration(v);
 }
 
@@ -137,7 +137,7 @@ Simulated simulated(std::uint64_t seed) {
 // frames) with `options`, and checks that the directions left to the prior are exactly the ones the
 // kinematics cannot see: each foot's markers turned about the 3-DoF ankle (3 each), the head's about
 // the 3-DoF neck (3) and each hand's about the wrist's free axis (1 each), 11 in all.
-void expect_the_model_gauges(track::CalibrationOptions options, const char* criterion) {
+void expect_the_model_gauges(calibration::CalibrationOptions options, const char* criterion) {
   sim::SubjectOptions without_soft_tissue;
   without_soft_tissue.soft_tissue_mm = 0;
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), without_soft_tissue, 7);
@@ -146,8 +146,8 @@ void expect_the_model_gauges(track::CalibrationOptions options, const char* crit
   track::TrackerOptions tracker;
   tracker.samples = 101;
   options.final_pass = false;
-  const track::SubjectCalibration calibration =
-      track::calibrate_subject(model, track::map_markers(recording.labels, model.marker_names()), tracker,
+  const calibration::SubjectCalibration calibration =
+      calibration::calibrate_subject(model, body::map_markers(recording.labels, model.marker_names()), tracker,
                                recording, test::tracker_samples(tracker), options);
   std::map<std::string, int> count;
   for (const auto& d : calibration.passes.front().prior_only) {
@@ -166,7 +166,7 @@ void expect_the_model_gauges(track::CalibrationOptions options, const char* crit
 // The gauge directions found from the model: the directions whose data information is below 1e-5
 // of a marker coordinate's seen in every frame (below 1e-3 of the prior's).
 TEST(CalibrationAccuracy, FindsTheGaugeDirectionsOfTheModel) {
-  track::CalibrationOptions options;
+  calibration::CalibrationOptions options;
   options.prior_only_fraction = 1e-5;
   expect_the_model_gauges(options, "information ratio");
 }
@@ -175,7 +175,7 @@ TEST(CalibrationAccuracy, FindsTheGaugeDirectionsOfTheModel) {
 // cannot see keep (almost) none of their information through the poses' elimination, and every
 // other direction keeps more than 1e-4 of it.
 TEST(CalibrationAccuracy, TheShareCriterionFindsTheSameGaugeDirections) {
-  track::CalibrationOptions options;
+  calibration::CalibrationOptions options;
   options.prior_only_share = true;
   options.prior_only_fraction = 1e-4;
   options.bundle_iterations = 1;  // the directions are chosen at the first linearisation

@@ -9,13 +9,13 @@
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/evaluation.hpp>
+#include <s2kf/evaluation/evaluation.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/true_subject_reference.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "../../examples/s2kf/motion_json.hpp"
 #include "test_files.hpp"
@@ -83,7 +83,7 @@ MarkerSequence bundled_handstand(Eigen::Index frames) {
 TEST(GradientBaseline, ConvergesToTheTruthOnExactFrames) {
   const sim::Recording recording = exact_handstand(60, 1750);
   const body::BodyModel model = body::mmm_body_model(1000).scaled(1750);
-  const track::MarkerMapping mapping = track::map_markers(recording.labels, model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(recording.labels, model.marker_names());
   track::GradientBaseline baseline(model, mapping);
   Eigen::Index f = 0;
   auto next = [&](MarkerFrame& frame) {
@@ -100,8 +100,8 @@ TEST(GradientBaseline, ConvergesToTheTruthOnExactFrames) {
         if (index > 0) most_iterations = std::max(most_iterations, baseline.last_iterations());
       });
   for (double d : run.mean_marker_distance) EXPECT_LT(d, 0.05);  // mm, every frame, the first included
-  const track::TruthComparison truth =
-      track::compare_with_truth(model, run.motion, truth_table(recording, model), 0);
+  const evaluation::TruthComparison truth =
+      evaluation::compare_with_truth(model, run.motion, truth_table(recording, model), 0);
   EXPECT_LT(truth.segment_orientation_rms_deg, 0.05);
   EXPECT_LT(truth.limb_flexion_rms_deg, 0.1);
   EXPECT_LT(truth.root_position_rms_mm, 0.05);
@@ -111,10 +111,10 @@ TEST(GradientBaseline, ConvergesToTheTruthOnExactFrames) {
 
   // The evaluation's path (setup from the labels, the given height) gives the same fit.
   const MarkerSequence c3d_recording = as_c3d(recording);
-  const track::Session setup = evaluation_session(c3d_recording, 1750);
+  const pipeline::Session setup = evaluation_session(c3d_recording, 1750);
   const io::MotionTable truth_motion = truth_table(recording, model);
-  const track::MethodResult evaluated =
-      track::evaluate_method(setup, c3d_recording, track::Method::baseline, 0, &truth_motion, 0);
+  const evaluation::MethodResult evaluated =
+      evaluation::evaluate_method(setup, c3d_recording, pipeline::Method::baseline, 0, &truth_motion, 0);
   EXPECT_LT(evaluated.worst_all_frames_mm, 0.05);
   ASSERT_TRUE(evaluated.truth.has_value());
   EXPECT_LT(evaluated.truth->segment_orientation_rms_deg, 0.05);
@@ -122,7 +122,7 @@ TEST(GradientBaseline, ConvergesToTheTruthOnExactFrames) {
 
 /// Fits one set of model markers (three frames, warm-started) and returns the estimate.
 track::FrameEstimate fit_points(const body::BodyModel& model, const Eigen::Matrix3Xd& points) {
-  const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(model.marker_names(), model.marker_names());
   const Eigen::Array<bool, Eigen::Dynamic, 1> visible =
       Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(points.cols(), true);
   track::GradientBaseline baseline(model, mapping);
@@ -177,13 +177,13 @@ TEST(GradientBaseline, StaysOnTheLimitWhenTheMarkersAskForMore) {
 
 TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
   const MarkerSequence recording = bundled_handstand(60);
-  const track::Session setup = evaluation_session(recording);
-  const io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
-  track::check_truth(truth, setup, 60);
-  const track::MethodResult s2kf =
-      track::evaluate_method(setup, recording, track::Method::s2kf, 93, &truth, 20);
-  const track::MethodResult baseline =
-      track::evaluate_method(setup, recording, track::Method::baseline, 0, &truth, 20);
+  const pipeline::Session setup = evaluation_session(recording);
+  const io::MotionTable truth = evaluation::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
+  evaluation::check_truth(truth, setup, 60);
+  const evaluation::MethodResult s2kf =
+      evaluation::evaluate_method(setup, recording, pipeline::Method::s2kf, 93, &truth, 20);
+  const evaluation::MethodResult baseline =
+      evaluation::evaluate_method(setup, recording, pipeline::Method::baseline, 0, &truth, 20);
 
   // The same trackers run by hand through run_tracking.
   Eigen::Index f = 0;
@@ -215,7 +215,7 @@ TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
       track::converged_frame(by_hand.mean_marker_distance, track::frames_per_second(recording.rate_hz));
   EXPECT_EQ(s2kf.converged_frame, converged);
   EXPECT_DOUBLE_EQ(s2kf.level_mm, track::mean_from(by_hand.mean_marker_distance, converged));
-  const track::TruthComparison direct = track::compare_with_truth(setup.model, by_hand.motion, truth, 20);
+  const evaluation::TruthComparison direct = evaluation::compare_with_truth(setup.model, by_hand.motion, truth, 20);
   ASSERT_TRUE(s2kf.truth.has_value());
   EXPECT_DOUBLE_EQ(s2kf.truth->segment_orientation_rms_deg, direct.segment_orientation_rms_deg);
   EXPECT_EQ(s2kf.truth->frames, 40);
@@ -229,14 +229,14 @@ TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
 
 TEST(Evaluation, OcclusionStudyHidesWhatTheProcessHidesAndMeasuresAgainstAllMarkers) {
   const MarkerSequence recording = bundled_handstand(60);
-  const track::Session setup = evaluation_session(recording);
-  track::OcclusionOptions options;
+  const pipeline::Session setup = evaluation_session(recording);
+  evaluation::OcclusionOptions options;
   options.runs = 2;
   options.samples = 93;
   options.seed = 11;
   options.occlusion.probability = 0.02;  // more than the paper's, so 60 frames hide something
   options.occlusion.mean_frames = 20;
-  const track::OcclusionStudy study = track::occlusion_monte_carlo(setup, recording, options, 20);
+  const evaluation::OcclusionStudy study = evaluation::occlusion_monte_carlo(setup, recording, options, 20);
   ASSERT_EQ(study.hidden.size(), 2u);
   EXPECT_EQ(study.markers, 50);
   double sum = 0;
@@ -262,11 +262,11 @@ TEST(Evaluation, OcclusionStudyHidesWhatTheProcessHidesAndMeasuresAgainstAllMark
   // tracker's own per-frame distance.
   options.occlusion.probability = 0;
   options.runs = 1;
-  const track::OcclusionStudy clear = track::occlusion_monte_carlo(setup, recording, options, 20);
-  const track::MethodResult s2kf =
-      track::evaluate_method(setup, recording, track::Method::s2kf, 93, nullptr, 20);
-  const track::MethodResult baseline =
-      track::evaluate_method(setup, recording, track::Method::baseline, 0, nullptr, 20);
+  const evaluation::OcclusionStudy clear = evaluation::occlusion_monte_carlo(setup, recording, options, 20);
+  const evaluation::MethodResult s2kf =
+      evaluation::evaluate_method(setup, recording, pipeline::Method::s2kf, 93, nullptr, 20);
+  const evaluation::MethodResult baseline =
+      evaluation::evaluate_method(setup, recording, pipeline::Method::baseline, 0, nullptr, 20);
   for (std::size_t k = 0; k < 60; ++k) {
     EXPECT_EQ(clear.hidden[0][k], 0);
     EXPECT_NEAR(clear.s2kf_distance[0][k], s2kf.run.mean_marker_distance[k], 1e-9) << k;
@@ -276,22 +276,22 @@ TEST(Evaluation, OcclusionStudyHidesWhatTheProcessHidesAndMeasuresAgainstAllMark
 
 TEST(Evaluation, DistanceAgainstAllMarkersCountsHiddenOnes) {
   const body::BodyModel model = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(model.marker_names(), model.marker_names());
   const Eigen::Matrix3Xd predicted = body::marker_positions(model, body::Pose{});
   Eigen::Matrix3Xd reference = predicted;
   reference(0, 0) += 50;  // one marker 50 mm off, the rest exact
   Eigen::Array<bool, Eigen::Dynamic, 1> visible =
       Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(predicted.cols(), true);
-  EXPECT_NEAR(track::mean_marker_distance(predicted, reference, visible, mapping),
+  EXPECT_NEAR(evaluation::mean_marker_distance(predicted, reference, visible, mapping),
               50.0 / model.marker_count(), 1e-12);
   visible(0) = false;  // a marker the reference itself lacks does not count
-  EXPECT_NEAR(track::mean_marker_distance(predicted, reference, visible, mapping), 0.0, 1e-12);
+  EXPECT_NEAR(evaluation::mean_marker_distance(predicted, reference, visible, mapping), 0.0, 1e-12);
 }
 
 TEST(Evaluation, SampleSweepRunsEachCount) {
   const MarkerSequence recording = bundled_handstand(20);
-  const track::Session setup = evaluation_session(recording);
-  const auto sweep = track::sample_sweep(setup, recording, {93, 101}, nullptr, 5);
+  const pipeline::Session setup = evaluation_session(recording);
+  const auto sweep = evaluation::sample_sweep(setup, recording, {93, 101}, nullptr, 5);
   ASSERT_EQ(sweep.size(), 2u);
   EXPECT_EQ(sweep[0].samples, 93);
   EXPECT_EQ(sweep[1].samples, 101);
@@ -301,12 +301,12 @@ TEST(Evaluation, SampleSweepRunsEachCount) {
 
 TEST(Evaluation, TruthThatDoesNotFitIsRejected) {
   const MarkerSequence recording = bundled_handstand(10);
-  const track::Session setup = evaluation_session(recording);
-  io::MotionTable truth = track::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 10);
-  EXPECT_NO_THROW(track::check_truth(truth, setup, 10));
-  EXPECT_THROW(track::check_truth(truth, setup, 11), std::invalid_argument);
+  const pipeline::Session setup = evaluation_session(recording);
+  io::MotionTable truth = evaluation::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 10);
+  EXPECT_NO_THROW(evaluation::check_truth(truth, setup, 10));
+  EXPECT_THROW(evaluation::check_truth(truth, setup, 11), std::invalid_argument);
   truth.joint_names[3] = "elbow";
-  EXPECT_THROW(track::check_truth(truth, setup, 10), std::invalid_argument);
+  EXPECT_THROW(evaluation::check_truth(truth, setup, 10), std::invalid_argument);
 }
 
 }  // namespace

@@ -3,8 +3,8 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/hidden_time_error.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/evaluation/hidden_time_error.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 
 #include <gtest/gtest.h>
 
@@ -32,7 +32,7 @@ io::MotionTable still_motion(const body::BodyModel& model) {
 
 struct Fixture {
   body::BodyModel model = body::mmm_body_model(1750);
-  track::MarkerMapping mapping;  // point p is model marker p
+  body::MarkerMapping mapping;  // point p is model marker p
   Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> visible;
   int segment_frame = -1;            // the segment whose markers are hidden
   std::vector<int> segment_markers;  // its markers
@@ -52,7 +52,7 @@ struct Fixture {
   }
 };
 
-const track::SegmentHiddenTimeError& segment(const track::HiddenTimeError& e, const std::string& name) {
+const evaluation::SegmentHiddenTimeError& segment(const evaluation::HiddenTimeError& e, const std::string& name) {
   for (const auto& s : e.segments)
     if (s.segment == name) return s;
   throw std::runtime_error("no segment " + name);
@@ -68,8 +68,8 @@ TEST(HiddenTimeError, BinsFramesByTheTimeHiddenAndGivesTheirRms) {
   // The root turned by 0.1 rad in frames 20-29 (hidden 1.1 ... 2.0 s): every segment is 0.1 rad off there.
   const double error = 0.1;
   for (Eigen::Index k = 20; k < 30; ++k) estimate.values(k, 3) = error;
-  const track::HiddenTimeError e =
-      track::hidden_time_error(s.model, estimate, truth, s.visible, s.mapping, kRate, 0);
+  const evaluation::HiddenTimeError e =
+      evaluation::hidden_time_error(s.model, estimate, truth, s.visible, s.mapping, kRate, 0);
   ASSERT_EQ(static_cast<int>(e.segments.size()), s.segments);
   const auto& hidden = segment(e, s.model.frame_name(s.segment_frame));
   EXPECT_EQ(hidden.markers, static_cast<int>(s.segment_markers.size()));
@@ -102,8 +102,8 @@ TEST(HiddenTimeError, LeavesOutTheWarmUpAndUntrackedFramesButCountsTheirHiddenTi
   const io::MotionTable truth = still_motion(s.model);
   io::MotionTable estimate = truth;
   estimate.values.row(25).setConstant(NAN);  // not tracked
-  const track::HiddenTimeError e =
-      track::hidden_time_error(s.model, estimate, truth, s.visible, s.mapping, kRate, 20);
+  const evaluation::HiddenTimeError e =
+      evaluation::hidden_time_error(s.model, estimate, truth, s.visible, s.mapping, kRate, 20);
   const auto& hidden = segment(e, s.model.frame_name(s.segment_frame));
   // Frames 20-29 (hidden 2.1 ... 3.0 s) land beyond 2 s, less the untracked frame 25; 30-59 are visible.
   EXPECT_EQ(hidden.bins[6].frames, 9);
@@ -116,19 +116,19 @@ TEST(HiddenTimeError, LeavesOutTheWarmUpAndUntrackedFramesButCountsTheirHiddenTi
 TEST(HiddenTimeError, RejectsInputsThatDoNotFit) {
   Fixture s;
   const io::MotionTable truth = still_motion(s.model);
-  track::MarkerMapping short_mapping = s.mapping;
+  body::MarkerMapping short_mapping = s.mapping;
   short_mapping.point_of_marker.pop_back();
-  EXPECT_THROW(track::hidden_time_error(s.model, truth, truth, s.visible, short_mapping, kRate, 0),
+  EXPECT_THROW(evaluation::hidden_time_error(s.model, truth, truth, s.visible, short_mapping, kRate, 0),
                std::invalid_argument);
-  EXPECT_THROW(track::hidden_time_error(s.model, truth, truth, s.visible.topRows(3), s.mapping, kRate, 0),
+  EXPECT_THROW(evaluation::hidden_time_error(s.model, truth, truth, s.visible.topRows(3), s.mapping, kRate, 0),
                std::invalid_argument);
-  EXPECT_THROW(track::hidden_time_error(s.model, truth, truth, s.visible, s.mapping, 0, 0),
+  EXPECT_THROW(evaluation::hidden_time_error(s.model, truth, truth, s.visible, s.mapping, 0, 0),
                std::invalid_argument);
-  EXPECT_THROW(track::hidden_time_error(s.model, truth, truth, s.visible, s.mapping, kRate, 0, {0.5, 0.2}),
+  EXPECT_THROW(evaluation::hidden_time_error(s.model, truth, truth, s.visible, s.mapping, kRate, 0, {0.5, 0.2}),
                std::invalid_argument);
   io::MotionTable other = truth;
   other.joint_names.back() = "XX";
-  EXPECT_THROW(track::hidden_time_error(s.model, other, truth, s.visible, s.mapping, kRate, 0),
+  EXPECT_THROW(evaluation::hidden_time_error(s.model, other, truth, s.visible, s.mapping, kRate, 0),
                std::invalid_argument);
 }
 

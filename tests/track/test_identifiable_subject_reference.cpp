@@ -8,8 +8,8 @@
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/identifiable_subject_reference.hpp>
-#include <s2kf/track/true_subject_reference.hpp>
+#include <s2kf/evaluation/identifiable_subject_reference.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
 
 #include <Eigen/Geometry>
 
@@ -46,7 +46,7 @@ GaugeCase simulate_sweep(double soft_tissue_mm) {
   recording.frame_rate = 100;
   recording.frames = 400;
   c.recording = sim::simulate_recording(motion, c.subject, recording, 7);
-  c.frames = track::calibration_frame_indices({{0, 400}}, track::CalibrationOptions{});
+  c.frames = evaluation::calibration_frame_indices({{0, 400}}, calibration::CalibrationOptions{});
   return c;
 }
 
@@ -73,8 +73,8 @@ TEST(IdentifiableSubjectReference, ResetsTheGaugeToTheNominalAndKeepsTheRest) {
   const body::BodyModel& truth = c.subject.model;
   const double turn = 3 * M_PI / 180;
   const body::BodyModel nominal = nominal_of(truth, turn);
-  const track::IdentifiableSubject identifiable = track::identifiable_subject(
-      nominal, c.subject, c.recording, c.frames, track::CalibrationOptions{}, kNoiseMm, kExactGauges);
+  const evaluation::IdentifiableSubject identifiable = evaluation::identifiable_subject(
+      nominal, c.subject, c.recording, c.frames, calibration::CalibrationOptions{}, kNoiseMm, kExactGauges);
   // The model's gauges (docs/tracking.md): 3 per ankle, 3 for the neck, 1 per wrist, with a gap
   // above them.
   EXPECT_LT(identifiable.information_ratios(10), 0.2 * identifiable.threshold);
@@ -111,8 +111,8 @@ TEST(IdentifiableSubjectReference, WithoutAGaugeDifferenceIsTheTrueSubjectFit) {
   const GaugeCase c = simulate_sweep(8);  // with soft tissue
   const body::BodyModel& truth = c.subject.model;
   const body::BodyModel nominal = nominal_of(truth, 0);  // the thigh only
-  const track::IdentifiableSubject identifiable = track::identifiable_subject(
-      nominal, c.subject, c.recording, c.frames, track::CalibrationOptions{}, kNoiseMm, kExactGauges);
+  const evaluation::IdentifiableSubject identifiable = evaluation::identifiable_subject(
+      nominal, c.subject, c.recording, c.frames, calibration::CalibrationOptions{}, kNoiseMm, kExactGauges);
   EXPECT_GE(identifiable.reset_directions, 11);
   for (int m = 0; m < truth.marker_count(); ++m)
     EXPECT_LT((identifiable.model.markers[static_cast<std::size_t>(m)].offset -
@@ -121,8 +121,8 @@ TEST(IdentifiableSubjectReference, WithoutAGaugeDifferenceIsTheTrueSubjectFit) {
               1e-3);
   sim::Subject reset = c.subject;
   reset.model = identifiable.model;
-  const io::MotionTable reference = track::true_subject_fit(c.subject, c.recording);
-  const io::MotionTable fit = track::true_subject_fit(reset, c.recording);
+  const io::MotionTable reference = evaluation::true_subject_fit(c.subject, c.recording);
+  const io::MotionTable fit = evaluation::true_subject_fit(reset, c.recording);
   ASSERT_EQ(fit.values.rows(), reference.values.rows());
   EXPECT_LT((fit.values - reference.values).cwiseAbs().maxCoeff(), 1e-4);
 }
@@ -130,8 +130,8 @@ TEST(IdentifiableSubjectReference, WithoutAGaugeDifferenceIsTheTrueSubjectFit) {
 TEST(IdentifiableSubjectReference, ThresholdZeroKeepsTheTrueSubject) {
   const GaugeCase c = simulate_sweep(0);
   const body::BodyModel nominal = nominal_of(c.subject.model, 0.2);
-  const track::IdentifiableSubject identifiable = track::identifiable_subject(
-      nominal, c.subject, c.recording, c.frames, track::CalibrationOptions{}, kNoiseMm, 0);
+  const evaluation::IdentifiableSubject identifiable = evaluation::identifiable_subject(
+      nominal, c.subject, c.recording, c.frames, calibration::CalibrationOptions{}, kNoiseMm, 0);
   EXPECT_EQ(identifiable.reset_directions, 0);
   for (int m = 0; m < c.subject.model.marker_count(); ++m)
     EXPECT_EQ(identifiable.model.markers[static_cast<std::size_t>(m)].offset,
@@ -143,20 +143,20 @@ TEST(IdentifiableSubjectReference, RefusesAnotherModelOrBadFrames) {
   body::BodyModel other = c.subject.model;
   other.markers.pop_back();
   EXPECT_THROW(
-      track::identifiable_subject(other, c.subject, c.recording, c.frames, {}, kNoiseMm, kExactGauges),
+      evaluation::identifiable_subject(other, c.subject, c.recording, c.frames, {}, kNoiseMm, kExactGauges),
       std::invalid_argument);
   EXPECT_THROW(
-      track::identifiable_subject(c.subject.model, c.subject, c.recording, {400}, {}, kNoiseMm, kExactGauges),
+      evaluation::identifiable_subject(c.subject.model, c.subject, c.recording, {400}, {}, kNoiseMm, kExactGauges),
       std::invalid_argument);
-  EXPECT_THROW(track::identifiable_subject(c.subject.model, c.subject, c.recording, c.frames, {}, 0, 1e-3),
+  EXPECT_THROW(evaluation::identifiable_subject(c.subject.model, c.subject, c.recording, c.frames, {}, 0, 1e-3),
                std::invalid_argument);
 }
 
 TEST(IdentifiableSubjectReference, CalibrationFramesFollowTheStretches) {
-  track::CalibrationOptions options;
+  calibration::CalibrationOptions options;
   options.skip_frames = 2;
   options.stride = 3;
-  EXPECT_EQ(track::calibration_frame_indices({{0, 10}, {100, 6}}, options),
+  EXPECT_EQ(evaluation::calibration_frame_indices({{0, 10}, {100, 6}}, options),
             (std::vector<long>{2, 5, 8, 102, 105}));
 }
 

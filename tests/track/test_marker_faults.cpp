@@ -9,8 +9,8 @@
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/session.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <gtest/gtest.h>
 
@@ -29,7 +29,7 @@ constexpr long kWarmup = 20;
 using test_support::data_file;
 
 struct Outcome {
-  track::TruthComparison truth;
+  evaluation::TruthComparison truth;
   track::TrackingRun run;
   body::BodyModel model;
 };
@@ -47,7 +47,7 @@ struct Walk {
 
   // Tracks without calibration (the faults are the subject here), the height fixed to the clean
   // recording's estimate so that every run uses the same model.
-  Outcome track(const MarkerSequence& recording, bool guard, track::SessionOptions options = {}) {
+  Outcome track(const MarkerSequence& recording, bool guard, pipeline::SessionOptions options = {}) {
     options.calibrate = false;
     options.height_mm = height_mm;
     if (!guard) {
@@ -56,11 +56,11 @@ struct Walk {
     }
     SequenceFrameSource source(recording);
     const body::BodyModel base = body::mmm_body_model(1000);
-    const track::Session session =
-        track::prepare_session(source, body::model_marker_set(base), options, test::tracker_samples());
+    const pipeline::Session session =
+        pipeline::prepare_session(source, body::model_marker_set(base), options, test::tracker_samples());
     if (height_mm == 0) height_mm = session.height_mm;
-    Outcome outcome{{}, track::run_session(session, source, test::tracker_samples()), session.model};
-    outcome.truth = track::compare_with_truth(session.model, outcome.run.motion, truth, kWarmup);
+    Outcome outcome{{}, pipeline::run_session(session, source, test::tracker_samples()), session.model};
+    outcome.truth = evaluation::compare_with_truth(session.model, outcome.run.motion, truth, kWarmup);
     return outcome;
   }
 
@@ -161,7 +161,7 @@ TEST(UnobservableTwists, ATinyInputChangeMakesATinyChange) {
   MarkerSequence nudged = walk.clean;
   nudged.positions.col(60).array() += 0.0005;
   const Outcome changed = walk.track(nudged, true);
-  track::SessionOptions no_split;
+  pipeline::SessionOptions no_split;
   no_split.tracker.axial_split_sd_rad = 0;
   const Outcome free_reference = walk.track(walk.clean, true, no_split);
   const Outcome free_changed = walk.track(nudged, true, no_split);

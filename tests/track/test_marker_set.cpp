@@ -6,7 +6,7 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
 
 #include <gtest/gtest.h>
 
@@ -155,15 +155,15 @@ TEST(MarkerSet, WarnsAboutSegmentsWithOneMarker) {
 TEST(MarkerSet, AutomaticChoiceFitsTheLab) {
   const std::vector<body::MarkerSet> sets{cli::resolve_marker_set("kit"), cli::resolve_marker_set("cmu"),
                                           cli::resolve_marker_set("plugin_gait")};
-  EXPECT_EQ(track::choose_marker_set(labels_in_file("85_02.c3d"), sets), 1);
-  EXPECT_EQ(track::choose_marker_set(labels_in_file("HDM_mm_01-02_03_120.c3d"), sets), 1);
-  EXPECT_EQ(track::choose_marker_set(labels_in_file("PiG_Motion-FlatFoot-One.c3d"), sets), 2);
-  EXPECT_EQ(track::choose_marker_set(labels_in_file("test1.c3d"), sets), 2);
-  EXPECT_EQ(track::choose_marker_set(sets[0].labels(), sets), 0);
-  EXPECT_EQ(track::choose_marker_set({"foo", "bar"}, sets), -1);
+  EXPECT_EQ(body::choose_marker_set(labels_in_file("85_02.c3d"), sets), 1);
+  EXPECT_EQ(body::choose_marker_set(labels_in_file("HDM_mm_01-02_03_120.c3d"), sets), 1);
+  EXPECT_EQ(body::choose_marker_set(labels_in_file("PiG_Motion-FlatFoot-One.c3d"), sets), 2);
+  EXPECT_EQ(body::choose_marker_set(labels_in_file("test1.c3d"), sets), 2);
+  EXPECT_EQ(body::choose_marker_set(sets[0].labels(), sets), 0);
+  EXPECT_EQ(body::choose_marker_set({"foo", "bar"}, sets), -1);
   EXPECT_DOUBLE_EQ(body::marker_set_match(labels_in_file("85_02.c3d"), sets[1]), 1.0);
   // test1 labels the forearm LFRA: the alias maps it to LFRM.
-  const track::MarkerMapping mapping = track::map_marker_set(labels_in_file("test1.c3d"), sets[2]);
+  const body::MarkerMapping mapping = body::map_marker_set(labels_in_file("test1.c3d"), sets[2]);
   const std::vector<std::string> pig_labels = sets[2].labels();
   const auto lfrm = std::find(pig_labels.begin(), pig_labels.end(), "LFRM") - pig_labels.begin();
   ASSERT_GE(mapping.point_of_marker[static_cast<std::size_t>(lfrm)], 0);

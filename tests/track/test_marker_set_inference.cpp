@@ -15,13 +15,13 @@
 #include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/marker_set_inference.hpp>
-#include <s2kf/track/marker_set_mapping.hpp>
-#include <s2kf/track/rigid_clusters.hpp>
-#include <s2kf/track/segment_rigidity.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/markerset/marker_set_inference.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/markerset/rigid_clusters.hpp>
+#include <s2kf/markerset/segment_rigidity.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <gtest/gtest.h>
 
@@ -43,8 +43,8 @@ using test_support::data_file;
 
 constexpr int kSamples = 101;
 
-track::MarkerSetInferenceOptions inference_options() {
-  track::MarkerSetInferenceOptions options;
+markerset::MarkerSetInferenceOptions inference_options() {
+  markerset::MarkerSetInferenceOptions options;
   options.tracker.samples = kSamples;
   return options;
 }
@@ -85,7 +85,7 @@ TEST(RigidClusters, FindsTheBodiesOfAHingedPair) {
     }
     return Eigen::Vector3d(500 * std::sin(t * 7), 300 * std::cos(t * 5), 100 * t) + jitter;
   });
-  const track::RigidClusters c = track::find_rigid_clusters(s, {0, 1, 2, 3, 4, 5, 6, 7, 8});
+  const markerset::RigidClusters c = markerset::find_rigid_clusters(s, {0, 1, 2, 3, 4, 5, 6, 7, 8});
   ASSERT_EQ(c.clusters.size(), 3u);
   EXPECT_EQ(c.clusters[0], (std::vector<int>{0, 1, 2, 3}));
   EXPECT_EQ(c.clusters[1], (std::vector<int>{4, 5, 6, 7}));
@@ -101,7 +101,7 @@ TEST(RigidClusters, FindsTheBodiesOfAHingedPair) {
   const double n = static_cast<double>(s.frame_count()), mean = sum / n;
   EXPECT_NEAR(c.distance_sd(0, 5), std::sqrt(sum2 / n - mean * mean), 1e-6);
   EXPECT_NEAR(c.mean_distance(0, 5), mean, 1e-9);
-  EXPECT_GT(track::rigidity_ratio(c, 0, 5, {}), 1.0);
+  EXPECT_GT(markerset::rigidity_ratio(c, 0, 5, {}), 1.0);
   EXPECT_EQ(c.cluster_of_point[6], 1);
 }
 
@@ -116,13 +116,13 @@ struct Accuracy {
 Accuracy track_with(const MarkerSequence& recording, const body::MarkerSet& set,
                     const io::MotionTable& truth) {
   SequenceFrameSource source(recording);
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   options.tracker.samples = kSamples;
   const SampleSet& samples = test::tracker_samples(kSamples);
-  const track::Session session = track::prepare_session(source, set, options, samples);
-  const track::TrackingRun run = track::run_session(session, source, samples);
-  const track::TruthComparison truth_comparison =
-      track::compare_with_truth(session.model, run.motion, truth, 20);
+  const pipeline::Session session = pipeline::prepare_session(source, set, options, samples);
+  const track::TrackingRun run = pipeline::run_session(session, source, samples);
+  const evaluation::TruthComparison truth_comparison =
+      evaluation::compare_with_truth(session.model, run.motion, truth, 20);
   return {track::mean_from(run.mean_marker_distance, 20), truth_comparison.all_joint_rms_deg,
           truth_comparison.segment_orientation_rms_deg, truth_comparison.worst_joint,
           truth_comparison.worst_joint_rms_deg};
@@ -146,10 +146,10 @@ void expect_inferred_like_named(const std::string& name, Eigen::Index first) {
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
   std::shuffle(order.begin(), order.end(), std::mt19937(7));
   for (std::size_t i = 0; i < order.size(); ++i) scrambled.labels[i] = "m" + std::to_string(100 + order[i]);
-  ASSERT_EQ(track::choose_marker_set(scrambled.labels, {body::model_marker_set(base)}), -1);
+  ASSERT_EQ(body::choose_marker_set(scrambled.labels, {body::model_marker_set(base)}), -1);
 
-  const track::InferredMarkerSet inferred =
-      track::infer_marker_set(scrambled, test::tracker_samples(kSamples), inference_options());
+  const markerset::InferredMarkerSet inferred =
+      markerset::infer_marker_set(scrambled, test::tracker_samples(kSamples), inference_options());
   // Where the true segment of each marker is known: how many the inference put there.
   int right_segment = 0;
   for (std::size_t i = 0; i < named.labels.size(); ++i) {
@@ -165,7 +165,7 @@ void expect_inferred_like_named(const std::string& name, Eigen::Index first) {
   const Accuracy with_names = track_with(named, body::model_marker_set(base), truth);
   const Accuracy with_inferred = track_with(scrambled, inferred.set, truth);
   double worst_confidence = 1;
-  for (const track::InferredSegment& s : inferred.segments)
+  for (const markerset::InferredSegment& s : inferred.segments)
     worst_confidence = std::min(worst_confidence, s.confidence);
   std::printf(
       "[inference] %s from frame %ld: %d of %zu markers on their true segment, template frame %ld, %zu "
@@ -219,9 +219,9 @@ TEST(SegmentRigidity, RepairsAThighMarkerOnTheHandAndAHandMarkerOnTheThigh) {
     points.push_back(static_cast<int>(p));
     truth.push_back(base.markers[static_cast<std::size_t>(base.marker_index(recording.labels[p]))].frame);
   }
-  const track::RigidClusters clusters = track::find_rigid_clusters(recording, points);
+  const markerset::RigidClusters clusters = markerset::find_rigid_clusters(recording, points);
   std::vector<int> frame_of = truth;
-  EXPECT_TRUE(track::repair_segment_assignment(clusters, base, points, frame_of).empty());
+  EXPECT_TRUE(markerset::repair_segment_assignment(clusters, base, points, frame_of).empty());
   EXPECT_EQ(frame_of, truth);
 
   const auto point_of = [&](const std::string& label) {
@@ -237,11 +237,11 @@ TEST(SegmentRigidity, RepairsAThighMarkerOnTheHandAndAHandMarkerOnTheThigh) {
     const std::size_t marker = point_of(label);
     frame_of = truth;
     frame_of[marker] = base.frame_index(c.wrong);
-    const std::vector<track::MarkerRigidity> before =
-        track::marker_rigidity(clusters, base, points, frame_of);
-    const std::vector<track::SegmentMove> moves =
-        track::repair_segment_assignment(clusters, base, points, frame_of);
-    for (const track::SegmentMove& m : moves)
+    const std::vector<markerset::MarkerRigidity> before =
+        markerset::marker_rigidity(clusters, base, points, frame_of);
+    const std::vector<markerset::SegmentMove> moves =
+        markerset::repair_segment_assignment(clusters, base, points, frame_of);
+    for (const markerset::SegmentMove& m : moves)
       std::printf("[rigidity] moved %s from %s to %s (median distance SD %.1f -> %.1f mm)\n",
                   recording.labels[m.marker].c_str(), m.from.c_str(), m.to.c_str(), m.from_sd_mm, m.to_sd_mm);
     EXPECT_GT(before[marker].own_sd_mm, 20.0) << label;  // centimetres against the wrong segment's markers
@@ -259,7 +259,7 @@ TEST(SegmentRigidity, RepairsAThighMarkerOnTheHandAndAHandMarkerOnTheThigh) {
 
 std::string refusal(const MarkerSequence& recording) {
   try {
-    track::infer_marker_set(recording, test::tracker_samples(kSamples), inference_options());
+    markerset::infer_marker_set(recording, test::tracker_samples(kSamples), inference_options());
   } catch (const std::invalid_argument& e) {
     return e.what();
   }

@@ -3,8 +3,8 @@
 // marker, and nothing that is not the same marker may.
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/marker_set_labels.hpp>
-#include <s2kf/core/label_text.hpp>
-#include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/body/label_text.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
 
 #include "../../examples/s2kf/marker_set_json.hpp"
 
@@ -108,7 +108,7 @@ TEST(LabelNormalisation, BundledSetsAcceptPrefixedRecordings) {
       cli::load_marker_set(std::filesystem::path(S2KF_DATA_DIR) / "markersets" / "plugin_gait.json");
   std::vector<std::string> labels;
   for (const std::string& label : pig.labels()) labels.push_back("L" + label);
-  const track::MarkerMapping mapping = track::map_marker_set(labels, pig);
+  const body::MarkerMapping mapping = body::map_marker_set(labels, pig);
   EXPECT_EQ(mapping.markers_used(), static_cast<int>(pig.entries.size()));
   EXPECT_TRUE(mapping.ignored_labels.empty());
   ASSERT_EQ(mapping.label_notes.size(), 1u);

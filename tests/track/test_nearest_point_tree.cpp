@@ -1,4 +1,4 @@
-#include <s2kf/track/nearest_point_tree.hpp>
+#include <s2kf/geometry/nearest_point_tree.hpp>
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 
 namespace {
 
-using s2kf::track::NearestPointTree;
+using s2kf::geometry::NearestPointTree;
 
 // Brute force: the first column at the smallest squared distance below the bound.
 NearestPointTree::Hit scan(const Eigen::Matrix3Xd& points, const Eigen::Vector3d& q, double below) {

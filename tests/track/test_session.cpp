@@ -1,4 +1,4 @@
-// The tracking pipeline (track/session.hpp): a session prepared from a C3D file streamed frame by
+// The tracking pipeline (pipeline/session.hpp): a session prepared from a C3D file streamed frame by
 // frame equals one prepared from the same recording in memory, rows handed to a sink equal the
 // kept table, and bad recordings are refused with a sentence before any tracking.
 #include "test_files.hpp"
@@ -6,7 +6,7 @@
 
 #include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/state_chart.hpp>
 
 #include <gtest/gtest.h>
@@ -32,14 +32,14 @@ TEST(Session, FileAndMemorySourcesGiveTheSameSessionAndRun) {
   const MarkerSequence head = all.frames(0, 150);
   SequenceFrameSource memory(head);
   ASSERT_EQ(file.labels(), head.labels);
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   options.calibration_frames = 150;
   options.calibration_windows = 1;  // the first 150 frames of the file: the memory source's frames
   const SampleSet& samples = test::tracker_samples();
-  const track::Session from_file = track::prepare_session(file, kit_like_set(), options, samples);
+  const pipeline::Session from_file = pipeline::prepare_session(file, kit_like_set(), options, samples);
   // The height estimate reads spread frames of the whole file; give the memory source the same.
   options.height_mm = from_file.height_mm;
-  const track::Session from_memory = track::prepare_session(memory, kit_like_set(), options, samples);
+  const pipeline::Session from_memory = pipeline::prepare_session(memory, kit_like_set(), options, samples);
   EXPECT_EQ(from_file.markers_used(), 50);
   ASSERT_TRUE(from_file.calibration.has_value());
   ASSERT_TRUE(from_memory.calibration.has_value());
@@ -50,10 +50,10 @@ TEST(Session, FileAndMemorySourcesGiveTheSameSessionAndRun) {
 
   // A sink receives exactly the rows the run would keep.
   std::vector<Eigen::VectorXd> rows;
-  track::RunHooks hooks;
+  pipeline::RunHooks hooks;
   hooks.sink = [&](const track::TrackedFrame& f) { rows.push_back(f.values); };
-  const track::TrackingRun streamed = track::run_session(from_memory, memory, samples, {}, hooks);
-  const track::TrackingRun kept = track::run_session(from_memory, memory, samples);
+  const track::TrackingRun streamed = pipeline::run_session(from_memory, memory, samples, {}, hooks);
+  const track::TrackingRun kept = pipeline::run_session(from_memory, memory, samples);
   ASSERT_EQ(rows.size(), 150u);
   ASSERT_EQ(kept.motion.frames(), 150);
   for (Eigen::Index r = 0; r < 150; ++r)
@@ -62,7 +62,7 @@ TEST(Session, FileAndMemorySourcesGiveTheSameSessionAndRun) {
         0.0)
         << r;
   EXPECT_EQ(streamed.mean_marker_distance, kept.mean_marker_distance);
-  EXPECT_TRUE(std::isfinite(track::calibrated_distance_mm(from_memory, kept)));
+  EXPECT_TRUE(std::isfinite(pipeline::calibrated_distance_mm(from_memory, kept)));
 }
 
 TEST(Session, RefusesRecordingsItCannotTrack) {
@@ -73,7 +73,7 @@ TEST(Session, RefusesRecordingsItCannotTrack) {
   SequenceFrameSource source(unknown);
   const SampleSet& samples = test::tracker_samples();
   try {
-    track::prepare_session(source, kit_like_set(), {}, samples);
+    pipeline::prepare_session(source, kit_like_set(), {}, samples);
     FAIL() << "labels of no marker were accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("none of its 3 point labels"), std::string::npos) << e.what();
@@ -81,7 +81,7 @@ TEST(Session, RefusesRecordingsItCannotTrack) {
   MarkerSequence no_rate = c3d::read_c3d(data_file("handstand.c3d")).frames(0, 5);
   no_rate.rate_hz = 0;
   SequenceFrameSource zero(no_rate);
-  EXPECT_THROW(track::prepare_session(zero, kit_like_set(), {}, samples), std::invalid_argument);
+  EXPECT_THROW(pipeline::prepare_session(zero, kit_like_set(), {}, samples), std::invalid_argument);
 
   // A recording in metres read as mm: a body of about 1.7 mm is not a person's, and a given height
   // (what the old message advised) does not hide it: the rigid marker pairs still measure 1.7 mm.
@@ -89,10 +89,10 @@ TEST(Session, RefusesRecordingsItCannotTrack) {
   metres.positions /= 1000;
   SequenceFrameSource tiny(metres);
   for (const double given : {0.0, 1750.0}) {
-    track::SessionOptions options;
+    pipeline::SessionOptions options;
     options.height_mm = given;
     try {
-      track::prepare_session(tiny, kit_like_set(), options, samples);
+      pipeline::prepare_session(tiny, kit_like_set(), options, samples);
       FAIL() << "a recording in metres was accepted with --height " << given;
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find("in metres, not millimetres"), std::string::npos) << e.what();
@@ -102,31 +102,31 @@ TEST(Session, RefusesRecordingsItCannotTrack) {
 
 TEST(Session, UnitsProblemComparesTheRigidPairsWithTheHeight) {
   // Estimated from the pairs themselves: only a body outside 300..3000 mm is refused.
-  EXPECT_EQ(track::units_problem(1700, 1700, "estimated from 12 rigid marker pairs"), "");
-  EXPECT_NE(track::units_problem(1.7, 1.7, "estimated from 12 rigid marker pairs").find("in metres"),
+  EXPECT_EQ(calibration::units_problem(1700, 1700, "estimated from 12 rigid marker pairs"), "");
+  EXPECT_NE(calibration::units_problem(1.7, 1.7, "estimated from 12 rigid marker pairs").find("in metres"),
             std::string::npos);
-  EXPECT_NE(track::units_problem(170, 170, "estimated from 3 rigid marker pairs").find("in centimetres"),
+  EXPECT_NE(calibration::units_problem(170, 170, "estimated from 3 rigid marker pairs").find("in centimetres"),
             std::string::npos);
   // A given height: the pairs must agree within a factor of 2 (a child, a mis-scaled set pass).
-  EXPECT_EQ(track::units_problem(1300, 1750, "given"), "");
-  EXPECT_NE(track::units_problem(1.75, 1750, "given").find("but the height given is 1750 mm"),
+  EXPECT_EQ(calibration::units_problem(1300, 1750, "given"), "");
+  EXPECT_NE(calibration::units_problem(1.75, 1750, "given").find("but the height given is 1750 mm"),
             std::string::npos);
-  EXPECT_NE(track::units_problem(68.9, 1750, "given").find("in inches"), std::string::npos);
+  EXPECT_NE(calibration::units_problem(68.9, 1750, "given").find("in inches"), std::string::npos);
   // A factor no unit explains is still refused, without naming a unit.
-  EXPECT_NE(track::units_problem(500, 1750, "given").find("not in millimetres"), std::string::npos);
+  EXPECT_NE(calibration::units_problem(500, 1750, "given").find("not in millimetres"), std::string::npos);
 }
 
 TEST(Session, StopsAtCoordinatesBeyondAKilometre) {
   MarkerSequence recording = c3d::read_c3d(data_file("handstand.c3d")).frames(0, 40);
   recording.frame(30).col(3) = Eigen::Vector3d(5e6, 0, 0);
   SequenceFrameSource source(recording);
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   options.calibrate = false;
   options.height_mm = 1750;
-  const track::Session session =
-      track::prepare_session(source, kit_like_set(), options, test::tracker_samples());
+  const pipeline::Session session =
+      pipeline::prepare_session(source, kit_like_set(), options, test::tracker_samples());
   try {
-    track::run_session(session, source, test::tracker_samples());
+    pipeline::run_session(session, source, test::tracker_samples());
     FAIL() << "a point 5 km away was tracked";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("frame 30"), std::string::npos) << e.what();
@@ -249,12 +249,12 @@ TEST(Session, CalibrationTracksWithItsOwnSampleSet) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const MarkerSequence head = c3d::read_c3d(data_file("handstand.c3d")).frames(0, 200);
   SequenceFrameSource source(head);
-  track::SessionOptions options;
+  pipeline::SessionOptions options;
   options.height_mm = 1705;
   const SampleSet& samples = test::tracker_samples();
-  const track::Session own = track::prepare_session(source, kit_like_set(), options, samples);
+  const pipeline::Session own = pipeline::prepare_session(source, kit_like_set(), options, samples);
   options.calibration_samples = test::tracker_samples(93);
-  const track::Session small = track::prepare_session(source, kit_like_set(), options, samples);
+  const pipeline::Session small = pipeline::prepare_session(source, kit_like_set(), options, samples);
   ASSERT_TRUE(own.calibration.has_value());
   ASSERT_TRUE(small.calibration.has_value());
   EXPECT_EQ(own.calibration_sample_count, samples.count());
@@ -263,7 +263,7 @@ TEST(Session, CalibrationTracksWithItsOwnSampleSet) {
   const std::vector<double>& residual = own.calibration->marker_residual_rms_mm;
   ASSERT_EQ(residual.size(), static_cast<std::size_t>(own.model.marker_count()));
   EXPECT_EQ(own.tracker.marker_noise_mm_per_marker,
-            track::marker_noise_from_residuals(residual, own.tracker.marker_noise_mm, {}));
+            pipeline::marker_noise_from_residuals(residual, own.tracker.marker_noise_mm, {}));
   int finite = 0;
   for (double r : residual) finite += std::isfinite(r) ? 1 : 0;
   EXPECT_EQ(finite, own.mapping.markers_used());
@@ -275,8 +275,8 @@ TEST(Session, CalibrationTracksWithItsOwnSampleSet) {
   EXPECT_GT(largest_change, 0.0);
   EXPECT_LT(largest_change, 1.0);  // mm; measured 0.06
   // ...and both fit the recording about as well (same tracker, 301 samples, over the 200 frames).
-  const track::TrackingRun own_run = track::run_session(own, source, samples);
-  const track::TrackingRun small_run = track::run_session(small, source, samples);
+  const track::TrackingRun own_run = pipeline::run_session(own, source, samples);
+  const track::TrackingRun small_run = pipeline::run_session(small, source, samples);
   const double own_mm = track::mean_from(own_run.mean_marker_distance, 20);
   const double small_mm = track::mean_from(small_run.mean_marker_distance, 20);
   EXPECT_LT(own_mm, 7.0);  // measured 5.20 mm, both
@@ -286,7 +286,7 @@ TEST(Session, CalibrationTracksWithItsOwnSampleSet) {
   options.calibration_samples.points = Eigen::MatrixXd::Zero(10, 40);
   options.calibration_samples.weights = Eigen::VectorXd::Constant(40, 1.0 / 40);
   try {
-    track::prepare_session(source, kit_like_set(), options, samples);
+    pipeline::prepare_session(source, kit_like_set(), options, samples);
     FAIL() << "a 10-dimensional calibration sample set was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("calibration's sample set has 10 dimensions but the tracker's 46"),
@@ -301,7 +301,7 @@ TEST(Session, MarkerNoiseFollowsTheCalibrationResiduals) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   // Median of the finite residuals {1, 2, 4, 8, 16} is 4.
   const std::vector<double> residual{2, 4, 8, nan, 16, 1};
-  const std::vector<double> noise = track::marker_noise_from_residuals(residual, 10.0, {});
+  const std::vector<double> noise = pipeline::marker_noise_from_residuals(residual, 10.0, {});
   ASSERT_EQ(noise.size(), residual.size());
   EXPECT_DOUBLE_EQ(noise[0], 5.0);
   EXPECT_DOUBLE_EQ(noise[1], 10.0);
@@ -310,23 +310,23 @@ TEST(Session, MarkerNoiseFollowsTheCalibrationResiduals) {
   EXPECT_DOUBLE_EQ(noise[4], 20.0);  // 4 times the median, clamped to 2
   EXPECT_DOUBLE_EQ(noise[5], 5.0);   // a quarter, clamped to a half
   const std::vector<double> own{nan, 3.0, nan, 7.0};
-  const std::vector<double> kept = track::marker_noise_from_residuals(residual, 10.0, own);
+  const std::vector<double> kept = pipeline::marker_noise_from_residuals(residual, 10.0, own);
   EXPECT_DOUBLE_EQ(kept[1], 3.0);
   EXPECT_DOUBLE_EQ(kept[3], 7.0);  // its own noise, though it had no residual
   EXPECT_DOUBLE_EQ(kept[2], 20.0);
   // No residual at all: the set's own noise, unchanged.
-  EXPECT_EQ(track::marker_noise_from_residuals({nan, nan}, 10.0, {}), std::vector<double>{});
+  EXPECT_EQ(pipeline::marker_noise_from_residuals({nan, nan}, 10.0, {}), std::vector<double>{});
 }
 
 // Calibration reads the whole of a short recording, and spread stretches of a long one.
 TEST(Session, CalibrationStretchesCoverTheRecordingWithinTheBudget) {
   using Stretches = std::vector<std::pair<std::int64_t, std::int64_t>>;
-  EXPECT_EQ(track::calibration_stretches(800, 1200, 4), (Stretches{{0, 800}}));
-  EXPECT_EQ(track::calibration_stretches(4000, 1200, 4),
+  EXPECT_EQ(pipeline::calibration_stretches(800, 1200, 4), (Stretches{{0, 800}}));
+  EXPECT_EQ(pipeline::calibration_stretches(4000, 1200, 4),
             (Stretches{{0, 300}, {1233, 300}, {2466, 300}, {3700, 300}}));
-  EXPECT_EQ(track::calibration_stretches(4000, 1200, 1), (Stretches{{0, 1200}}));
+  EXPECT_EQ(pipeline::calibration_stretches(4000, 1200, 1), (Stretches{{0, 1200}}));
   std::int64_t total = 0;
-  for (const auto& [first, count] : track::calibration_stretches(1'000'000, 1200, 4)) total += count;
+  for (const auto& [first, count] : pipeline::calibration_stretches(1'000'000, 1200, 4)) total += count;
   EXPECT_EQ(total, 1200);  // bounded, whatever the length
 }
 

@@ -7,11 +7,11 @@
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_set_mapping.hpp>
-#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "sweep_recording.hpp"
 #include "tracker_samples.hpp"
@@ -115,7 +115,7 @@ double offset_error(const body::BodyModel& model, const sim::Subject& subject, b
 /// marker set: their lengths are seen only through joint centres, and the upper neck's not at all
 /// (it trades freely against the head markers' offsets). `height_ratio` is the subject's height
 /// over the model's; `start` replaces the calibrated factors (for the error before calibration).
-double worst_scale_error(const track::SubjectCalibration& calibration, const sim::Subject& subject,
+double worst_scale_error(const calibration::SubjectCalibration& calibration, const sim::Subject& subject,
                          double height_ratio, const std::map<std::string, double>& start = {}) {
   double worst = 0;
   for (const auto& [segment, factor] : calibration.segment_scale) {
@@ -137,19 +137,19 @@ track::TrackerOptions fast_options() {
 /// Calibrates `model` on the synthetic recording with the default options (or the given
 /// weak-direction shrinkage) and no final tracking pass (the tests compare against the truth
 /// instead).
-track::SubjectCalibration calibrate(const body::BodyModel& model, const Synthetic& s,
+calibration::SubjectCalibration calibrate(const body::BodyModel& model, const Synthetic& s,
                                     std::optional<double> shrink = std::nullopt) {
-  track::CalibrationOptions options;
+  calibration::CalibrationOptions options;
   options.final_pass = false;
   if (shrink) options.weak_direction_shrink = *shrink;
-  return track::calibrate_subject(model, track::map_markers(s.recording.labels, model.marker_names()),
+  return calibration::calibrate_subject(model, body::map_markers(s.recording.labels, model.marker_names()),
                                   fast_options(), s.recording, test::tracker_samples(fast_options()),
                                   options);
 }
 
 io::MotionTable track_all(const body::BodyModel& model, const Synthetic& s,
                           const track::TrackerOptions& options) {
-  const track::MarkerMapping mapping = track::map_markers(s.recording.labels, model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(s.recording.labels, model.marker_names());
   track::Tracker tracker(model, mapping, options, 100.0, test::tracker_samples(options));
   std::size_t next = 0;
   auto frames = [&](MarkerFrame& frame) {
@@ -186,8 +186,8 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
   const double height = 1830;
   const Synthetic s = make_synthetic(400, 0.0, 7, height);
   const body::BodyModel base = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(s.recording.labels, base.marker_names());
-  track::HeightEstimator estimator(base, mapping);
+  const body::MarkerMapping mapping = body::map_markers(s.recording.labels, base.marker_names());
+  calibration::HeightEstimator estimator(base, mapping);
   for (std::size_t k = 0; k < s.points.size(); ++k) estimator.add_frame(s.points[k], s.visible[k]);
   ASSERT_TRUE(estimator.height_mm().has_value());
   const body::BodyModel model = base.scaled(*estimator.height_mm());
@@ -195,7 +195,7 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
   struct Recovery {
     double offsets_mm, lengths, residual_mm;
   };
-  const auto recovered = [&](const track::SubjectCalibration& calibration, const char* name) {
+  const auto recovered = [&](const calibration::SubjectCalibration& calibration, const char* name) {
     const Recovery r{offset_error(calibration.model, s.subject),
                      worst_scale_error(calibration, s.subject, ratio),
                      calibration.passes.back().rms_after_mm};
@@ -210,7 +210,7 @@ TEST(SubjectCalibration, RecoversOffsetsAndBoneLengthsOfTheTrueSubject) {
     }
     return r;
   };
-  const track::SubjectCalibration exact = calibrate(model, s, 0.0);
+  const calibration::SubjectCalibration exact = calibrate(model, s, 0.0);
   std::map<std::string, double> ones;
   for (const auto& entry : exact.segment_scale) ones[entry.first] = 1.0;
   const double before = offset_error(model, s.subject),
@@ -250,14 +250,14 @@ TEST(SubjectCalibration, AdjustsTheSubjectAtGivenPoses) {
   for (Eigen::Index k = 0; k < s.recording.frames(); ++k)
     for (int i = 0; i < 3; ++i) s.recording.positions(30 + i, k) += jitter(random);
   const body::BodyModel model = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(s.recording.labels, model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(s.recording.labels, model.marker_names());
   std::vector<std::pair<long, body::Pose>> poses;
   for (long k = 0; k < s.recording.frames(); k += 2)
     poses.emplace_back(k, s.recording.truth[static_cast<std::size_t>(k)]);
-  track::CalibrationOptions options;
+  calibration::CalibrationOptions options;
   options.weak_direction_shrink = 0;
-  const track::SubjectCalibration adjusted =
-      track::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, poses, options);
+  const calibration::SubjectCalibration adjusted =
+      calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, poses, options);
   ASSERT_EQ(adjusted.passes.size(), 1u);
   EXPECT_EQ(adjusted.passes[0].frames_used, 100);
   EXPECT_GT(offset_error(model, s.subject), 10.0);
@@ -277,14 +277,14 @@ TEST(SubjectCalibration, AdjustsTheSubjectAtGivenPoses) {
 
   // Poses it cannot use are refused with a sentence.
   std::vector<std::pair<long, body::Pose>> outside{{s.recording.frames(), s.recording.truth.front()}};
-  EXPECT_THROW(track::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, outside, options),
+  EXPECT_THROW(calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, outside, options),
                std::invalid_argument);
   std::vector<std::pair<long, body::Pose>> short_pose{{0, s.recording.truth.front()}};
   short_pose[0].second.joints.resize(3);
   EXPECT_THROW(
-      track::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, short_pose, options),
+      calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, short_pose, options),
       std::invalid_argument);
-  EXPECT_THROW(track::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, {}, options),
+  EXPECT_THROW(calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, {}, options),
                std::invalid_argument);
 }
 
@@ -312,15 +312,15 @@ TEST(SubjectCalibration, AStaticTrialFixesTheGauges) {
   recording_options.frames = 300;
   const sim::Recording recording = sim::simulate_recording(still, subject, recording_options, 7);
   const body::BodyModel model = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(recording.labels, model.marker_names());
-  track::CalibrationOptions options;
+  const body::MarkerMapping mapping = body::map_markers(recording.labels, model.marker_names());
+  calibration::CalibrationOptions options;
   options.final_pass = false;
   options.weak_direction_shrink = 0;
   options.estimate_segment_scales = false;  // a static pose cannot tell them from the offsets
   const auto calibrated = [&](double sd_rad) {
-    track::CalibrationOptions o = options;
+    calibration::CalibrationOptions o = options;
     o.static_pose_sd_rad = sd_rad;
-    return track::calibrate_subject(model, mapping, fast_options(), recording,
+    return calibration::calibrate_subject(model, mapping, fast_options(), recording,
                                     test::tracker_samples(fast_options()), o)
         .model;
   };
@@ -363,23 +363,23 @@ TEST(SubjectCalibration, WeakDirectionShrinkageKeepsTheShareMuOverMuPlusC) {
   subject.model.joints[static_cast<std::size_t>(longer)].translation *= 1.05;
   const sim::Recording recording = test_support::sweep_recording(subject, 3, 400, 5.0);
   const auto calibrated = [&](double c) {
-    track::CalibrationOptions options;
+    calibration::CalibrationOptions options;
     options.final_pass = false;
     options.weak_direction_shrink = c;
-    return track::calibrate_subject(model, track::map_markers(recording.labels, model.marker_names()),
+    return calibration::calibrate_subject(model, body::map_markers(recording.labels, model.marker_names()),
                                     fast_options(), recording, test::tracker_samples(fast_options()),
                                     options);
   };
-  const auto fraction_moved = [&](const track::SubjectCalibration& calibration) {
+  const auto fraction_moved = [&](const calibration::SubjectCalibration& calibration) {
     const Eigen::Vector3d step = calibration.model.markers[static_cast<std::size_t>(moved)].offset -
                                  model.markers[static_cast<std::size_t>(moved)].offset;
     return step.dot(displacement) / displacement.squaredNorm();
   };
-  const auto length_factor = [&](const track::SubjectCalibration& calibration) {
+  const auto length_factor = [&](const calibration::SubjectCalibration& calibration) {
     return calibration.model.joints[static_cast<std::size_t>(longer)].translation.norm() /
            model.joints[static_cast<std::size_t>(longer)].translation.norm();
   };
-  const track::SubjectCalibration none = calibrated(0), one = calibrated(1), huge = calibrated(1e6);
+  const calibration::SubjectCalibration none = calibrated(0), one = calibrated(1), huge = calibrated(1e6);
   double largest_offset_move = 0;
   for (std::size_t m = 0; m < model.markers.size(); ++m)
     largest_offset_move =
@@ -399,12 +399,12 @@ TEST(SubjectCalibration, LowersJointAngleErrorAndKeepsJointsInsideLimits) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const Synthetic s = make_synthetic(300, 8.0, 11);  // default soft tissue
   const body::BodyModel model = body::mmm_body_model(1750);
-  const track::SubjectCalibration calibration = calibrate(model, s);
+  const calibration::SubjectCalibration calibration = calibrate(model, s);
   const io::MotionTable truth = truth_table(s, model);
-  const track::TruthComparison plain =
-      track::compare_with_truth(model, track_all(model, s, fast_options()), truth, 50);
-  const track::TruthComparison calibrated =
-      track::compare_with_truth(model, track_all(calibration.model, s, fast_options()), truth, 50);
+  const evaluation::TruthComparison plain =
+      evaluation::compare_with_truth(model, track_all(model, s, fast_options()), truth, 50);
+  const evaluation::TruthComparison calibrated =
+      evaluation::compare_with_truth(model, track_all(calibration.model, s, fast_options()), truth, 50);
   std::cout << "all-joint RMS " << plain.all_joint_rms_deg << " -> " << calibrated.all_joint_rms_deg
             << " deg; segment orientation RMS " << plain.segment_orientation_rms_deg << " -> "
             << calibrated.segment_orientation_rms_deg << " deg\n";
@@ -414,36 +414,36 @@ TEST(SubjectCalibration, LowersJointAngleErrorAndKeepsJointsInsideLimits) {
 
 TEST(SubjectCalibration, RejectsInputsThatCannotBeCalibrated) {
   const body::BodyModel model = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(model.marker_names(), model.marker_names());
   const SampleSet& samples = test::tracker_samples(fast_options());
   MarkerSequence none;
   none.labels = model.marker_names();
   none.rate_hz = 100;
   none.resize(0);
-  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), none, samples),
+  EXPECT_THROW(calibration::calibrate_subject(model, mapping, fast_options(), none, samples),
                std::invalid_argument);
-  track::CalibrationOptions options;
+  calibration::CalibrationOptions options;
   options.iterations = 0;
   MarkerSequence one = none;
   one.resize(1);
   one.set_frame(0, body::marker_positions(model, body::zero_pose(model)),
                 FrameVisibility::Constant(model.marker_count(), true));
-  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), one, samples, options),
+  EXPECT_THROW(calibration::calibrate_subject(model, mapping, fast_options(), one, samples, options),
                std::invalid_argument);
   for (const double shrink : {-0.1, std::numeric_limits<double>::quiet_NaN(), HUGE_VAL}) {
-    track::CalibrationOptions shrinking;
+    calibration::CalibrationOptions shrinking;
     shrinking.weak_direction_shrink = shrink;
     try {
-      track::calibrate_subject(model, mapping, fast_options(), one, samples, shrinking);
+      calibration::calibrate_subject(model, mapping, fast_options(), one, samples, shrinking);
       ADD_FAILURE() << "a weak-direction shrinkage of " << shrink << " was accepted";
     } catch (const std::invalid_argument& error) {
       EXPECT_NE(std::string(error.what()).find("weak-direction shrinkage"), std::string::npos)
           << error.what();
     }
   }
-  track::MarkerMapping short_mapping = mapping;
+  body::MarkerMapping short_mapping = mapping;
   short_mapping.point_of_marker.pop_back();
-  EXPECT_THROW(track::calibrate_subject(model, short_mapping, fast_options(), one, samples),
+  EXPECT_THROW(calibration::calibrate_subject(model, short_mapping, fast_options(), one, samples),
                std::invalid_argument);
 }
 
@@ -454,15 +454,15 @@ TEST(SubjectCalibration, ResultDoesNotDependOnTheThreadCount) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const Synthetic s = make_synthetic(300, 8.0, 5);
   const body::BodyModel model = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(s.recording.labels, model.marker_names());
-  track::CalibrationOptions options;
+  const body::MarkerMapping mapping = body::map_markers(s.recording.labels, model.marker_names());
+  calibration::CalibrationOptions options;
   options.final_pass = false;
   options.restart_frames = {150};
   options.threads = 1;
-  const track::SubjectCalibration one = track::calibrate_subject(
+  const calibration::SubjectCalibration one = calibration::calibrate_subject(
       model, mapping, fast_options(), s.recording, test::tracker_samples(fast_options()), options);
   options.threads = 3;
-  const track::SubjectCalibration three = track::calibrate_subject(
+  const calibration::SubjectCalibration three = calibration::calibrate_subject(
       model, mapping, fast_options(), s.recording, test::tracker_samples(fast_options()), options);
   ASSERT_EQ(one.passes.size(), three.passes.size());
   EXPECT_GT(one.passes.front().bundle_iterations, 1);
@@ -484,7 +484,7 @@ TEST(SubjectCalibration, ResultDoesNotDependOnTheThreadCount) {
                                 .norm());
   EXPECT_GT(moved, 1.0);
   options.threads = 0;
-  EXPECT_THROW(track::calibrate_subject(model, mapping, fast_options(), s.recording,
+  EXPECT_THROW(calibration::calibrate_subject(model, mapping, fast_options(), s.recording,
                                         test::tracker_samples(fast_options()), options),
                std::invalid_argument);
 }
@@ -524,7 +524,7 @@ TEST(TrackerMarkerNoise, NoisyMarkerBarelyMovesTheEstimate) {
 
   track::TrackerOptions wrong = plain;
   wrong.marker_noise_mm_per_marker.assign(count - 1, 10.0);
-  EXPECT_THROW(track::Tracker(model, track::map_markers(s.recording.labels, model.marker_names()), wrong,
+  EXPECT_THROW(track::Tracker(model, body::map_markers(s.recording.labels, model.marker_names()), wrong,
                               100.0, test::tracker_samples(wrong)),
                std::invalid_argument);
   wrong.marker_noise_mm_per_marker.assign(count, -1.0);
@@ -541,7 +541,7 @@ namespace {
 TEST(SubjectCalibration, DISABLED_RecoveryOverSeeds) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const Synthetic s = make_synthetic(1200, 0.0, seed);
-    const track::SubjectCalibration calibration = calibrate(body::mmm_body_model(1750), s);
+    const calibration::SubjectCalibration calibration = calibrate(body::mmm_body_model(1750), s);
     const double offsets = offset_error(calibration.model, s.subject);
     const double lengths = worst_scale_error(calibration, s.subject, 1.0);
     std::cout << "seed " << seed << ": offset error " << offsets << " mm, worst length error "

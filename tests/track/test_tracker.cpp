@@ -10,12 +10,12 @@
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -58,7 +58,7 @@ using namespace test_support;
 
 TEST(MarkerMapping, StripsSubjectPrefixesMatchesCaseInsensitivelyAndReportsTheRest) {
   const auto mapping =
-      track::map_markers({"Sub:LASI", "rasi", "Foo", "LASI", " C7 "}, {"LASI", "RASI", "C7", "T10"});
+      body::map_markers({"Sub:LASI", "rasi", "Foo", "LASI", " C7 "}, {"LASI", "RASI", "C7", "T10"});
   EXPECT_EQ(mapping.point_of_marker, (std::vector<int>{0, 1, 4, -1}));
   EXPECT_EQ(mapping.ignored_labels,
             (std::vector<std::string>{"Foo", "LASI"}));  // unknown, then the duplicate
@@ -202,7 +202,7 @@ TEST(Tracker, KeepsTrackingUnderThePapersOcclusionProcess) {
   const Tracked t = track_recording(occluded, truth);
   // The paper's metric: distance to all recorded markers, hidden ones included.
   const body::BodyModel model = body::mmm_body_model(1000);
-  const auto mapping = track::map_markers(labels_of(complete), model.marker_names());
+  const auto mapping = body::map_markers(labels_of(complete), model.marker_names());
   double sum = 0;
   long count = 0;
   for (Eigen::Index f = 20; f < complete.frame_count(); ++f)
@@ -322,7 +322,7 @@ TEST(Tracker, AHandNoMarkerSeesStaysWhereItWasLastSeen) {
 // flexion_speed_per_s, every other joint at joint_speed_per_s, per frame (speed / rate)^2.
 TEST(Tracker, WalksTheFlexionsFasterThanTheOtherJoints) {
   const body::BodyModel model = body::mmm_body_model(1750);
-  const auto mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const auto mapping = body::map_markers(model.marker_names(), model.marker_names());
   track::TrackerOptions options;
   options.flexion_speed_per_s = 9;
   options.joint_speed_per_s = 3;
@@ -385,12 +385,12 @@ TEST(Tracker, TheSlowerWalkOfTheOtherJointsHoldsPartlyHiddenSegments) {
 
 TEST(Tracker, RejectsOptionsAndMappingsThatCannotWork) {
   const body::BodyModel model = body::mmm_body_model(1750);
-  track::MarkerMapping none;
+  body::MarkerMapping none;
   none.point_of_marker.assign(model.marker_count(), -1);
   EXPECT_THROW(track::Tracker(model, none, {}, 100, test::tracker_samples()), std::invalid_argument);
   track::TrackerOptions bad;
   bad.marker_noise_mm = -1;
-  const auto mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const auto mapping = body::map_markers(model.marker_names(), model.marker_names());
   EXPECT_THROW(track::Tracker(model, mapping, bad, 100, test::tracker_samples()), std::invalid_argument);
   EXPECT_THROW(track::Tracker(model, mapping, {}, 0, test::tracker_samples()), std::invalid_argument);
   EXPECT_THROW(track::preset_options("fast", 100), std::invalid_argument);
@@ -400,7 +400,7 @@ TEST(Tracker, TheMeasurementStacksTheMarkersBodyPartByBodyPart) {
   // The information form's groups must be consecutive: the pelvis, the upper body (spine, head
   // and arms), each leg; every marker once, the model's order within a part.
   const body::BodyModel model = body::mmm_body_model(1750);
-  const auto mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const auto mapping = body::map_markers(model.marker_names(), model.marker_names());
   const track::Tracker tracker(model, mapping, {}, 100, test::tracker_samples());
   const std::vector<int>& used = tracker.used_markers();
   std::vector<int> sorted = used;
@@ -428,7 +428,7 @@ TEST(Tracker, TheMeasurementStacksTheMarkersBodyPartByBodyPart) {
 
 TEST(Tracker, FramesBeforeEnoughMarkersAreReportedAsNotTracked) {
   const body::BodyModel model = body::mmm_body_model(1750);
-  const auto mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const auto mapping = body::map_markers(model.marker_names(), model.marker_names());
   track::Tracker tracker(model, mapping, {}, 100, test::tracker_samples());
   const Eigen::Matrix3Xd zero = body::marker_positions(model, body::Pose{});
   Eigen::Array<bool, Eigen::Dynamic, 1> visible = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(50, false);
@@ -617,7 +617,7 @@ namespace {
 // rates by conditioning (they were zero at the start).
 TEST(Tracker, ConstantVelocityPredictsAsTheLinearModelAndLearnsRates) {
   body::BodyModel model = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(model.marker_names(), model.marker_names());
   track::TrackerOptions options;
   options.motion_model = track::MotionModel::constant_velocity;
   track::Tracker tracker(model, mapping, options, 100, test::tracker_samples());

@@ -4,12 +4,12 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "tracked_recording.hpp"
 #include "tracker_samples.hpp"
@@ -25,7 +25,7 @@ namespace {
 using namespace s2kf;
 
 struct Smoothed {
-  track::TruthComparison filtered, smoothed;
+  evaluation::TruthComparison filtered, smoothed;
   io::MotionTable filtered_motion, smoothed_motion;
   body::BodyModel model;
 };
@@ -36,9 +36,9 @@ Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0,
   const c3d::Recording recording = c3d::read_c3d(base + ".c3d");
   const io::MotionTable truth = io::load_motion_csv(base + "_truth.csv");
   body::BodyModel model = body::mmm_body_model(1000);
-  const track::MarkerMapping mapping =
-      track::map_markers(test_support::labels_of(recording), model.marker_names());
-  track::HeightEstimator heights(model, mapping);
+  const body::MarkerMapping mapping =
+      body::map_markers(test_support::labels_of(recording), model.marker_names());
+  calibration::HeightEstimator heights(model, mapping);
   for (Eigen::Index f = 0; f < recording.frame_count(); f += 5)
     heights.add_frame(recording.frame(f), recording.visible.col(f));
   model = model.scaled(heights.height_mm().value_or(1750));
@@ -51,12 +51,12 @@ Smoothed track_and_smooth(const std::string& name, Eigen::Index frames = 0,
   Smoothed s{{}, {}, run.motion, run.motion, model};
   EXPECT_EQ(static_cast<long>(smoother.frames()), run.frames_tracked);
   smoother.smooth(s.smoothed_motion);
-  s.filtered = track::compare_with_truth(model, s.filtered_motion, truth, 20);
-  s.smoothed = track::compare_with_truth(model, s.smoothed_motion, truth, 20);
+  s.filtered = evaluation::compare_with_truth(model, s.filtered_motion, truth, 20);
+  s.smoothed = evaluation::compare_with_truth(model, s.smoothed_motion, truth, 20);
   return s;
 }
 
-void print(const char* what, const track::TruthComparison& t) {
+void print(const char* what, const evaluation::TruthComparison& t) {
   std::printf("%s: all-joint %.2f deg, limb flexion %.2f deg, segments %.2f deg, root %.2f mm / %.2f deg\n",
               what, t.all_joint_rms_deg, t.limb_flexion_rms_deg, t.segment_orientation_rms_deg,
               t.root_position_rms_mm, t.root_orientation_rms_deg);
@@ -140,7 +140,7 @@ TEST(TrackingSmoother, WorksWithTheConstantVelocityModel) {
 
 TEST(TrackingSmoother, RejectsFramesThatAreNotConsecutive) {
   body::BodyModel model = body::mmm_body_model(1750);
-  const track::MarkerMapping mapping = track::map_markers(model.marker_names(), model.marker_names());
+  const body::MarkerMapping mapping = body::map_markers(model.marker_names(), model.marker_names());
   track::Tracker tracker(model, mapping, track::TrackerOptions{}, 100, test::tracker_samples());
   track::TrackingSmoother smoother(tracker);
   smoother.record(tracker, 0);  // not tracked yet: nothing kept

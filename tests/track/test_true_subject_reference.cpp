@@ -6,8 +6,8 @@
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/true_subject_reference.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <gtest/gtest.h>
 
@@ -37,8 +37,8 @@ TEST(TrueSubjectReference, RecoversTheTruthWhenOnlyTheSubjectDiffersFromTheModel
   options.noise_sd_mm = 0;
   const Case c = simulate(options);
   const io::MotionTable truth = sim::truth_motion(c.recording, c.subject.joint_names);
-  const io::MotionTable fit = track::true_subject_fit(c.subject, c.recording);
-  const track::TruthComparison t = track::compare_with_truth(c.subject.model, fit, truth, 0);
+  const io::MotionTable fit = evaluation::true_subject_fit(c.subject, c.recording);
+  const evaluation::TruthComparison t = evaluation::compare_with_truth(c.subject.model, fit, truth, 0);
   EXPECT_EQ(t.frames, 60);
   EXPECT_LT(t.root_position_rms_mm, 1e-3);
   EXPECT_LT(t.root_orientation_rms_deg, 1e-3);
@@ -50,13 +50,13 @@ TEST(TrueSubjectReference, RecoversTheTruthWhenOnlyTheSubjectDiffersFromTheModel
 TEST(TrueSubjectReference, IsBetterThanTheNominalModelOnARealisticSubject) {
   const Case c = simulate(sim::SubjectOptions{});
   const io::MotionTable truth = sim::truth_motion(c.recording, c.subject.joint_names);
-  const track::TruthComparison reference =
-      track::compare_with_truth(c.subject.model, track::true_subject_fit(c.subject, c.recording), truth, 0);
+  const evaluation::TruthComparison reference =
+      evaluation::compare_with_truth(c.subject.model, evaluation::true_subject_fit(c.subject, c.recording), truth, 0);
   // The same fit with the nominal model of the subject's height.
   sim::Subject nominal = c.subject;
   nominal.model = body::mmm_body_model(1000).scaled(c.subject.height_mm);
-  const track::TruthComparison plain =
-      track::compare_with_truth(c.subject.model, track::true_subject_fit(nominal, c.recording), truth, 0);
+  const evaluation::TruthComparison plain =
+      evaluation::compare_with_truth(c.subject.model, evaluation::true_subject_fit(nominal, c.recording), truth, 0);
   EXPECT_GT(reference.segment_orientation_rms_deg, 0.1);  // soft tissue and noise remain
   EXPECT_LT(reference.segment_orientation_rms_deg, 6.0);
   EXPECT_LT(reference.segment_orientation_rms_deg, 0.8 * plain.segment_orientation_rms_deg);
@@ -66,8 +66,8 @@ TEST(TrueSubjectReference, IsBetterThanTheNominalModelOnARealisticSubject) {
 TEST(TrueSubjectReference, RefusesARecordingOfAnotherMarkerSet) {
   Case c = simulate(sim::SubjectOptions{});
   c.recording.labels.back() = "XYZ";
-  EXPECT_THROW(track::true_subject_fit(c.subject, c.recording), std::invalid_argument);
-  EXPECT_THROW(track::best_constant_placement(c.subject, c.recording), std::invalid_argument);
+  EXPECT_THROW(evaluation::true_subject_fit(c.subject, c.recording), std::invalid_argument);
+  EXPECT_THROW(evaluation::best_constant_placement(c.subject, c.recording), std::invalid_argument);
 }
 
 TEST(BestConstantPlacement, IsThePlacementWhenNothingMovesTheMarkers) {
@@ -77,7 +77,7 @@ TEST(BestConstantPlacement, IsThePlacementWhenNothingMovesTheMarkers) {
   Case c = simulate(options);
   // Hide one marker in half the frames: the mean over the frames that show it is the same.
   for (Eigen::Index k = 0; k < c.recording.frames(); k += 2) c.recording.visible(3, k) = false;
-  const sim::Subject constant = track::best_constant_placement(c.subject, c.recording);
+  const sim::Subject constant = evaluation::best_constant_placement(c.subject, c.recording);
   for (std::size_t m = 0; m < constant.model.markers.size(); ++m)
     EXPECT_LT((constant.model.markers[m].offset - c.subject.model.markers[m].offset).norm(), 1e-9) << m;
   EXPECT_EQ(constant.model.joints.size(), c.subject.model.joints.size());
@@ -99,7 +99,7 @@ TEST(BestConstantPlacement, TakesTheMeanOfTheMarkerInItsSegmentFrame) {
         tf.rotations[static_cast<std::size_t>(frame)] * (k % 2 == 0 ? d : Eigen::Vector3d(-3 * d));
     c.recording.positions.block<3, 1>(3 * 5, k) += shift;
   }
-  const sim::Subject constant = track::best_constant_placement(c.subject, c.recording);
+  const sim::Subject constant = evaluation::best_constant_placement(c.subject, c.recording);
   EXPECT_LT((constant.model.markers[5].offset - (c.subject.model.markers[5].offset - d)).norm(), 1e-9);
   EXPECT_LT((constant.model.markers[6].offset - c.subject.model.markers[6].offset).norm(), 1e-9);
 }
@@ -109,11 +109,11 @@ TEST(BestConstantPlacement, FitsARealisticSubjectBetterThanItsTruePlacement) {
   // per-frame fit is closer to the true motion than with the placement alone.
   const Case c = simulate(sim::SubjectOptions{});
   const io::MotionTable truth = sim::truth_motion(c.recording, c.subject.joint_names);
-  const track::TruthComparison placement =
-      track::compare_with_truth(c.subject.model, track::true_subject_fit(c.subject, c.recording), truth, 0);
-  const track::TruthComparison constant = track::compare_with_truth(
+  const evaluation::TruthComparison placement =
+      evaluation::compare_with_truth(c.subject.model, evaluation::true_subject_fit(c.subject, c.recording), truth, 0);
+  const evaluation::TruthComparison constant = evaluation::compare_with_truth(
       c.subject.model,
-      track::true_subject_fit(track::best_constant_placement(c.subject, c.recording), c.recording), truth, 0);
+      evaluation::true_subject_fit(evaluation::best_constant_placement(c.subject, c.recording), c.recording), truth, 0);
   EXPECT_GT(constant.segment_orientation_rms_deg, 0.1);  // the soft tissue's changes remain
   EXPECT_LT(constant.segment_orientation_rms_deg, placement.segment_orientation_rms_deg);
 }

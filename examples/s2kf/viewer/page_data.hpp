@@ -9,7 +9,7 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 
 #include <Eigen/Core>
 
@@ -94,7 +94,7 @@ inline body::Pose pose_of(const io::MotionRowRef& values) { return body::pose_fr
 /// (the rows of a tracked motion are the recording's frames in order); `truth` (same rows as the
 /// motion) adds the true skeleton, posed on `model`'s bones (a truth file holds angles only).
 /// Throws std::runtime_error when the motion, recording and model do not fit together.
-inline PageData build_page_data(const body::BodyModel& model, const track::MarkerMapping& mapping,
+inline PageData build_page_data(const body::BodyModel& model, const body::MarkerMapping& mapping,
                                 const io::MotionTable& motion, c3d::C3dReader& recording,
                                 const std::optional<io::MotionTable>& truth,
                                 std::size_t data_limit_bytes = kDefaultDataLimitBytes) {

@@ -12,7 +12,7 @@
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -75,7 +75,7 @@ inline io::MotionTable load_motion(const std::string& path, const char* what) {
 /// Writes PREFIX.html. `model` and `mapping` are the ones the motion was tracked with; `truth_csv`
 /// (may be empty) adds the true skeleton. Returns the page's path.
 inline std::string write_result_page(const std::string& prefix, const body::BodyModel& model,
-                                     const track::MarkerMapping& mapping, const std::string& truth_csv,
+                                     const body::MarkerMapping& mapping, const std::string& truth_csv,
                                      std::size_t data_limit_bytes = kDefaultDataLimitBytes) {
   namespace fs = std::filesystem;
   const nlohmann::json summary = load_summary(prefix);

@@ -9,7 +9,7 @@
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
-#include <s2kf/core/label_text.hpp>
+#include <s2kf/body/label_text.hpp>
 
 #include <Eigen/Core>
 

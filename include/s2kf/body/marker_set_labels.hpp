@@ -7,7 +7,7 @@
 
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/core/label_text.hpp>
+#include <s2kf/body/label_text.hpp>
 
 #include <algorithm>
 #include <map>

@@ -28,7 +28,7 @@
 #include <utility>
 #include <vector>
 
-#include <s2kf/core/label_text.hpp>
+#include <s2kf/body/label_text.hpp>
 #include <s2kf/io/c3d_error.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 

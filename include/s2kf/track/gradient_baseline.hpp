@@ -8,7 +8,7 @@
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <Eigen/Cholesky>
@@ -49,7 +49,7 @@ struct BaselineOptions {
 /// the tolerances: a few iterations per frame.
 class GradientBaseline {
  public:
-  GradientBaseline(body::BodyModel model, MarkerMapping mapping, BaselineOptions options = {})
+  GradientBaseline(body::BodyModel model, body::MarkerMapping mapping, BaselineOptions options = {})
       : model_(std::move(model)), mapping_(std::move(mapping)), options_(options) {
     if (mapping_.point_of_marker.size() != static_cast<std::size_t>(model_.marker_count()))
       throw std::invalid_argument("the marker mapping does not fit the body model");
@@ -96,7 +96,7 @@ class GradientBaseline {
   void solve(const Eigen::Matrix3Xd& points, int max_iterations);
 
   body::BodyModel model_;
-  MarkerMapping mapping_;
+  body::MarkerMapping mapping_;
   BaselineOptions options_;
   body::Pose pose_;
   Eigen::Matrix3d rotation_ = Eigen::Matrix3d::Identity();

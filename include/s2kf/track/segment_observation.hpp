@@ -15,7 +15,7 @@
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/marker_sequence.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/state_chart.hpp>
 
 #include <Eigen/Core>
@@ -66,7 +66,7 @@ struct SegmentObservation {
 
 /// The segments of `model` (a set applied to the base model) and what `mapping` lets the recording
 /// observe of them. `point_segment` (optional) receives the segment of every recording point.
-SegmentObservation observe_segments(const body::BodyModel& model, const MarkerMapping& mapping,
+SegmentObservation observe_segments(const body::BodyModel& model, const body::MarkerMapping& mapping,
                                     std::vector<int>* point_segment = nullptr);
 
 /// Standard deviation of theta = middle + half sin(Theta) for Theta ~ N(mean, variance), exactly:
@@ -90,7 +90,7 @@ Eigen::VectorXd segment_uncertainty_deg(const body::BodyModel& model, const Segm
 // The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
 #if S2KF_DEFINE_HEAVY
 
-S2KF_INLINE SegmentObservation observe_segments(const body::BodyModel& model, const MarkerMapping& mapping,
+S2KF_INLINE SegmentObservation observe_segments(const body::BodyModel& model, const body::MarkerMapping& mapping,
                                                 std::vector<int>* point_segment) {
   SegmentObservation result;
   result.segments.push_back("root");

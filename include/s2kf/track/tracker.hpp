@@ -14,8 +14,8 @@
 #include <s2kf/core/marginal_update.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
-#include <s2kf/track/marker_mapping.hpp>
-#include <s2kf/track/rigid_fit.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/geometry/rigid_fit.hpp>
 #include <s2kf/track/state_chart.hpp>
 #include <s2kf/track/tracker_options.hpp>
 
@@ -73,7 +73,7 @@ class Tracker {
   /// (sample_cache.hpp): where sample sets come from is the caller's business,
   /// so the tracker does no file I/O. Options are checked first:
   /// std::invalid_argument (one sentence) before any work.
-  Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options, double rate_hz,
+  Tracker(body::BodyModel model, body::MarkerMapping mapping, TrackerOptions options, double rate_hz,
           const SampleSet& samples);
 
   int joint_count() const { return model_.joint_count(); }
@@ -84,7 +84,7 @@ class Tracker {
   int motion_state_dimension() const { return with_rates() ? 2 * state_dimension() : state_dimension(); }
   bool with_rates() const { return options_.motion_model == MotionModel::constant_velocity; }
   const body::BodyModel& model() const { return model_; }
-  const MarkerMapping& mapping() const { return mapping_; }
+  const body::MarkerMapping& mapping() const { return mapping_; }
   const TrackerOptions& options() const { return options_; }
   bool initialised() const { return initialised_; }
   const FrameEstimate& estimate() const { return estimate_; }
@@ -177,7 +177,7 @@ class Tracker {
   void write_pose(body::Pose& pose) const;
 
   body::BodyModel model_;
-  MarkerMapping mapping_;
+  body::MarkerMapping mapping_;
   TrackerOptions options_;
   double rate_hz_;
   SmartSamplingKalmanFilter<Eigen::Dynamic> filter_;
@@ -211,7 +211,7 @@ class Tracker {
 // The definitions: inline here by default, or compiled once
 // (compilation_mode.hpp).
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE Tracker::Tracker(body::BodyModel model, MarkerMapping mapping, TrackerOptions options,
+S2KF_INLINE Tracker::Tracker(body::BodyModel model, body::MarkerMapping mapping, TrackerOptions options,
                              double rate_hz, const SampleSet& samples)
     : model_(std::move(model)),
       mapping_(std::move(mapping)),
@@ -431,7 +431,7 @@ S2KF_INLINE void Tracker::initialise(const Eigen::Matrix3Xd& points) {
   reference_rotation_.setIdentity();
   Eigen::Vector3d position = centroid;
   if (options_.rigid_initialisation) {
-    const RigidTransform fit = fit_rigid_transform(reference, measured);
+    const geometry::RigidTransform fit = geometry::fit_rigid_transform(reference, measured);
     reference_rotation_ = fit.rotation;
     position = fit.translation;
   }

@@ -31,7 +31,7 @@ struct TrackingRun {
   /// Per model marker: frames in which the tracker left the marker out although the recording
   /// showed it, by reason (MarkerRejection: innovation, frozen); empty for the baseline.
   std::vector<long> rejected_by_innovation, rejected_as_frozen;
-  StageTimes times;  ///< read, tracking, smoothing and writing (the sink's): filled by run_session
+  StageTimes times;  ///< read, tracking, smoothing and writing (the sink's): filled by pipeline::run_session
   long frames = 0;   ///< frames processed (rows produced), with or without a sink
   long frames_tracked = 0;
   long frames_prediction_only = 0;  ///< tracked frames whose update failed (the prediction was kept)

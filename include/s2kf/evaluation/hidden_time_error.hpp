@@ -11,8 +11,8 @@
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/track/marker_mapping.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <Eigen/Geometry>
 
@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::evaluation {
 
 /// One bin: frames whose hidden time t (seconds) lies in (lower_s, upper_s]; the first bin,
 /// [0, 0], holds the frames that show every marker of the segment.
@@ -55,7 +55,7 @@ inline std::vector<double> default_hidden_time_edges() { return {0.1, 0.25, 0.5,
 HiddenTimeError hidden_time_error(const body::BodyModel& model, const io::MotionTable& estimate,
                                   const io::MotionTable& truth,
                                   const Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>& visible,
-                                  const MarkerMapping& mapping, double rate_hz, long warmup,
+                                  const body::MarkerMapping& mapping, double rate_hz, long warmup,
                                   const std::vector<double>& edges = default_hidden_time_edges());
 
 // The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
@@ -63,7 +63,7 @@ HiddenTimeError hidden_time_error(const body::BodyModel& model, const io::Motion
 
 S2KF_INLINE HiddenTimeError hidden_time_error(
     const body::BodyModel& model, const io::MotionTable& estimate, const io::MotionTable& truth,
-    const Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>& visible, const MarkerMapping& mapping,
+    const Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>& visible, const body::MarkerMapping& mapping,
     double rate_hz, long warmup, const std::vector<double>& edges) {
   if (estimate.joint_names != model.joint_names() || truth.joint_names != model.joint_names())
     throw std::invalid_argument("hidden_time_error: joint columns differ from the body model's");
@@ -146,4 +146,4 @@ S2KF_INLINE HiddenTimeError hidden_time_error(
 
 #endif  // S2KF_DEFINE_HEAVY
 
-}  // namespace s2kf::track
+}  // namespace s2kf::evaluation

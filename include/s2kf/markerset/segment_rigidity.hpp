@@ -10,7 +10,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/track/rigid_clusters.hpp>
+#include <s2kf/markerset/rigid_clusters.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::markerset {
 
 struct SegmentRigidityOptions {
   /// A marker leaves its segment only where the median SD of its distances to the segment's other
@@ -187,4 +187,4 @@ S2KF_INLINE std::vector<SegmentMove> repair_segment_assignment(const RigidCluste
 
 #endif  // S2KF_DEFINE_HEAVY
 
-}  // namespace s2kf::track
+}  // namespace s2kf::markerset

@@ -12,12 +12,12 @@
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 
 #include <limits>
 #include <stdexcept>
 
-namespace s2kf::track {
+namespace s2kf::evaluation {
 
 /// The true-subject fit of every frame of `recording`, which `subject` was simulated on (its
 /// points are the subject's markers in order), as a motion table like the tracker's. A frame
@@ -37,9 +37,9 @@ S2KF_INLINE io::MotionTable true_subject_fit(const sim::Subject& subject, const 
   if (recording.labels != subject.marker_names ||
       recording.truth.size() != static_cast<std::size_t>(recording.frames()))
     throw std::invalid_argument("true_subject_fit: the recording was not simulated on this subject");
-  MarkerMapping mapping;
+  body::MarkerMapping mapping;
   for (int m = 0; m < subject.model.marker_count(); ++m) mapping.point_of_marker.push_back(m);
-  GradientBaseline fit(subject.model, mapping);
+  track::GradientBaseline fit(subject.model, mapping);
   io::MotionTable table;
   table.joint_names = subject.joint_names;
   table.values.resize(recording.frames(),
@@ -48,7 +48,7 @@ S2KF_INLINE io::MotionTable true_subject_fit(const sim::Subject& subject, const 
     table.frame.push_back(static_cast<long>(k));
     table.time.push_back(recording.time_s(k));
     fit.start_from(recording.truth[static_cast<std::size_t>(k)]);
-    const FrameEstimate& e = fit.process(recording.frame(k), recording.visible.col(k));
+    const track::FrameEstimate& e = fit.process(recording.frame(k), recording.visible.col(k));
     if (e.visible_markers > 0)
       body::write_pose_row(e.pose, table.values.row(k).transpose());
     else
@@ -83,4 +83,4 @@ S2KF_INLINE sim::Subject best_constant_placement(const sim::Subject& subject,
 
 #endif  // S2KF_DEFINE_HEAVY
 
-}  // namespace s2kf::track
+}  // namespace s2kf::evaluation

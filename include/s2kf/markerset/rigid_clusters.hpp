@@ -15,7 +15,7 @@
 #include <limits>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::markerset {
 
 struct RigidClusterOptions {
   /// A pair is rigid when its distance's SD stays below floor_mm + fraction * mean distance: sensor
@@ -110,4 +110,4 @@ S2KF_INLINE RigidClusters find_rigid_clusters(const MarkerSequence& recording, c
 
 #endif  // S2KF_DEFINE_HEAVY
 
-}  // namespace s2kf::track
+}  // namespace s2kf::markerset

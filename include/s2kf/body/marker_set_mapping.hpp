@@ -6,12 +6,12 @@
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/marker_set_labels.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 
 #include <string>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::body {
 
 /// Like map_markers, for a model made by apply_marker_set(base, set) (markers in the set's
 /// order): labels are assigned to entries by assign_labels (exact names and aliases, then ignoring
@@ -63,4 +63,4 @@ S2KF_INLINE int choose_marker_set(const std::vector<std::string>& recording_labe
 
 #endif  // S2KF_DEFINE_HEAVY
 
-}  // namespace s2kf::track
+}  // namespace s2kf::body

@@ -30,18 +30,18 @@
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
-#include <s2kf/core/label_text.hpp>
+#include <s2kf/body/label_text.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/marker_sequence.hpp>
-#include <s2kf/track/rigid_clusters.hpp>
-#include <s2kf/track/segment_rigidity.hpp>
+#include <s2kf/markerset/rigid_clusters.hpp>
+#include <s2kf/markerset/segment_rigidity.hpp>
 #include <s2kf/track/tracker_options.hpp>
 // Only the definitions below track recordings; a file that links the compiled library sees the
 // declaration and does not parse the session and the tracker for it (compilation_mode.hpp).
 #if S2KF_DEFINE_HEAVY
-#include <s2kf/track/nearest_point_tree.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/geometry/nearest_point_tree.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #endif
 
@@ -57,7 +57,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::markerset {
 
 struct MarkerSetInferenceOptions {
   /// The recording's vertical: 0, 1 or 2 for x, y or z up; -1: the axis along which the markers
@@ -72,7 +72,7 @@ struct MarkerSetInferenceOptions {
   /// The pose is refined (hips, knees, shoulders, elbows, trunk) only where the zero pose with the
   /// arms turned out leaves an RMS residual above this: a subject mid-motion, not one standing.
   double refine_pose_above_rms_mm = 30.0;
-  TrackerOptions tracker;  ///< for the rounds of tracking (fewer samples are enough)
+  track::TrackerOptions tracker;  ///< for the rounds of tracking (fewer samples are enough)
   long frames = 600;       ///< frames tracked per round at most, from the start
   long skip_frames = 20;   ///< tracked frames left out at the start of each round (convergence)
   int max_rounds = 4;
@@ -216,7 +216,7 @@ void match_steps(const Placed& placed, const Eigen::Matrix3Xd& lab, int steps, c
     Eigen::Vector3d shift = Eigen::Vector3d::Zero();
     int inliers = 0;
     for (Eigen::Index i = 0; i < lab.cols(); ++i) {
-      const NearestPointTree::Hit hit = nearest(Eigen::Vector3d(lab.col(i) - fit.translation));
+      const geometry::NearestPointTree::Hit hit = nearest(Eigen::Vector3d(lab.col(i) - fit.translation));
       fit.nearest[static_cast<std::size_t>(i)] = static_cast<int>(hit.index);
       fit.residual_mm[static_cast<std::size_t>(i)] = std::sqrt(hit.squared_distance);
       cost += std::min(hit.squared_distance, kTemplateCap * kTemplateCap);
@@ -243,7 +243,7 @@ inline void match_template(const body::BodyModel& base, const std::vector<Templa
     squared_distance = (placed.row(0).array() - marker.x()).square() +
                        (placed.row(1).array() - marker.y()).square() +
                        (placed.row(2).array() - marker.z()).square();
-    NearestPointTree::Hit hit;
+    geometry::NearestPointTree::Hit hit;
     hit.squared_distance = squared_distance.minCoeff(&hit.index);
     return hit;
   };
@@ -294,7 +294,7 @@ inline TemplateFit fit_template(const body::BodyModel& base, const std::vector<T
     // A trial placement turns and scales these; the nearest point to a marker is found by taking
     // the marker back into the model's frame instead, in a tree built once per pose.
     const Eigen::Matrix3Xd model_points = template_in_pose(base, candidates, joints);
-    const NearestPointTree tree(model_points);
+    const geometry::NearestPointTree tree(model_points);
     for (double height = 1300; height <= 2100; height += 50)
       for (int h = 0; h < kHeadings; ++h) {
         TemplateFit fit;
@@ -307,7 +307,7 @@ inline TemplateFit fit_template(const body::BodyModel& base, const std::vector<T
         const Eigen::Vector3d start = fit.translation;
         const double scale = height / 1000.0, cap_in_model = kTemplateCap / scale;
         const auto search = [&](const Eigen::Vector3d& marker) {
-          NearestPointTree::Hit hit =
+          geometry::NearestPointTree::Hit hit =
               tree.nearest(rotation.transpose() * marker / scale, cap_in_model * cap_in_model);
           if (hit.index >= 0) hit.squared_distance = (placed.col(hit.index) - marker).squaredNorm();
           return hit;
@@ -367,11 +367,11 @@ inline FrameSpread track_and_measure(const MarkerSequence& recording, const std:
                                      const MarkerSetInferenceOptions& options, double& estimated_height_mm) {
   MarkerSequence head = recording.frames(0, std::min<Eigen::Index>(recording.frame_count(), options.frames));
   SequenceFrameSource source(head);
-  SessionOptions session_options;
+  pipeline::SessionOptions session_options;
   session_options.tracker = options.tracker;
   session_options.calibrate = false;
   session_options.height_mm = height_mm;
-  const Session session = prepare_session(source, set, session_options, samples);
+  const pipeline::Session session = pipeline::prepare_session(source, set, session_options, samples);
   estimated_height_mm = session.height_mm;
   const body::BodyModel& model = session.model;
   const int frames = model.frame_count();
@@ -379,12 +379,12 @@ inline FrameSpread track_and_measure(const MarkerSequence& recording, const std:
   Eigen::MatrixXd count = Eigen::MatrixXd::Zero(n, frames), sum2 = count;
   std::vector<std::vector<Eigen::Vector3d>> sum(
       points.size(), std::vector<Eigen::Vector3d>(static_cast<std::size_t>(frames), Eigen::Vector3d::Zero()));
-  Tracker tracker(model, session.mapping, session.tracker, head.rate_hz, samples);
+  track::Tracker tracker(model, session.mapping, session.tracker, head.rate_hz, samples);
   MarkerFrame frame;
   long tracked = 0;
   for (Eigen::Index f = 0; f < head.frame_count(); ++f) {
     head.read_frame(f, frame);
-    const FrameEstimate& estimate = tracker.process(frame.positions, frame.visible);
+    const track::FrameEstimate& estimate = tracker.process(frame.positions, frame.visible);
     if (!estimate.tracked || tracked++ < options.skip_frames) continue;
     const body::FrameTransforms transforms =
         body::joint_frames(model, estimate.pose.root_position, estimate.root_rotation, estimate.pose.joints);
@@ -783,4 +783,4 @@ S2KF_INLINE InferredMarkerSet infer_marker_set(const MarkerSequence& recording, 
 
 #endif  // S2KF_DEFINE_HEAVY
 
-}  // namespace s2kf::track
+}  // namespace s2kf::markerset

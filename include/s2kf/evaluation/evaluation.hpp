@@ -8,20 +8,20 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/random.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_mapping.hpp>
-#include <s2kf/track/session.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/track/truth_metrics.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <Eigen/Core>
 
@@ -36,14 +36,14 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::evaluation {
 
 /// Throws std::invalid_argument (a sentence) unless `truth` fits the recording: the model's joint
 /// columns and one row per frame, numbered 0, 1, ...
-void check_truth(const io::MotionTable& truth, const Session& setup, Eigen::Index frames);
+void check_truth(const io::MotionTable& truth, const pipeline::Session& setup, Eigen::Index frames);
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE void check_truth(const io::MotionTable& truth, const Session& setup, Eigen::Index frames) {
+S2KF_INLINE void check_truth(const io::MotionTable& truth, const pipeline::Session& setup, Eigen::Index frames) {
   if (truth.joint_names != setup.model.joint_names())
     throw std::invalid_argument("the truth's joint columns are not the body model's " +
                                 std::to_string(setup.model.joint_count()) + " joints (BPx ... RAy) in order");
@@ -77,12 +77,12 @@ S2KF_INLINE io::MotionTable first_rows(const io::MotionTable& motion, Eigen::Ind
 /// against every recorded marker whether or not the tracker was shown it. NaN when none.
 double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eigen::Matrix3Xd& reference,
                             const Eigen::Array<bool, Eigen::Dynamic, 1>& reference_visible,
-                            const MarkerMapping& mapping);
+                            const body::MarkerMapping& mapping);
 
 #if S2KF_DEFINE_HEAVY
 S2KF_INLINE double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eigen::Matrix3Xd& reference,
                                         const Eigen::Array<bool, Eigen::Dynamic, 1>& reference_visible,
-                                        const MarkerMapping& mapping) {
+                                        const body::MarkerMapping& mapping) {
   double sum = 0;
   int count = 0;
   for (std::size_t m = 0; m < mapping.point_of_marker.size(); ++m) {
@@ -98,14 +98,14 @@ S2KF_INLINE double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const
 /// Tracks `input` with one method; `reference` (same frames and points) is what the marker
 /// distance is measured against (the input itself, or the complete recording when the input had
 /// markers hidden). on_frame(index) is called after every frame.
-TrackingRun track_recording(const Session& setup, const MarkerSequence& input,
-                            const MarkerSequence& reference, Method method, int samples,
+track::TrackingRun track_recording(const pipeline::Session& setup, const MarkerSequence& input,
+                            const MarkerSequence& reference, pipeline::Method method, int samples,
                             std::vector<double>* distance_to_reference = nullptr,
                             const std::function<void(long)>& on_frame = {});
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE TrackingRun track_recording(const Session& setup, const MarkerSequence& input,
-                                        const MarkerSequence& reference, Method method, int samples,
+S2KF_INLINE track::TrackingRun track_recording(const pipeline::Session& setup, const MarkerSequence& input,
+                                        const MarkerSequence& reference, pipeline::Method method, int samples,
                                         std::vector<double>* distance_to_reference,
                                         const std::function<void(long)>& on_frame) {
   if (reference.frame_count() != input.frame_count() || reference.point_count() != input.point_count())
@@ -120,7 +120,7 @@ S2KF_INLINE TrackingRun track_recording(const Session& setup, const MarkerSequen
     if (distance_to_reference) distance_to_reference->clear();
     auto each = [&](long index) {
       if (distance_to_reference) {
-        const FrameEstimate& e = tracker.estimate();
+        const track::FrameEstimate& e = tracker.estimate();
         distance_to_reference->push_back(
             e.tracked ? mean_marker_distance(e.predicted_markers, reference.frame(index),
                                              reference.visible.col(index), setup.mapping)
@@ -128,44 +128,44 @@ S2KF_INLINE TrackingRun track_recording(const Session& setup, const MarkerSequen
       }
       if (on_frame) on_frame(index);
     };
-    return run_tracking(tracker, next_frame, setup.rate_hz, setup.model.joint_names(), false, each);
+    return track::run_tracking(tracker, next_frame, setup.rate_hz, setup.model.joint_names(), false, each);
   };
-  if (method == Method::s2kf) {
-    TrackerOptions options = setup.tracker;
+  if (method == pipeline::Method::s2kf) {
+    track::TrackerOptions options = setup.tracker;
     options.samples = samples;
-    Tracker tracker(setup.model, setup.mapping, options, setup.rate_hz, lcd_sample_set(46, samples).set);
+    track::Tracker tracker(setup.model, setup.mapping, options, setup.rate_hz, lcd_sample_set(46, samples).set);
     return run_with(tracker);
   }
-  GradientBaseline baseline(setup.model, setup.mapping);
+  track::GradientBaseline baseline(setup.model, setup.mapping);
   return run_with(baseline);
 }
 #endif
 
 /// One method on one recording, summarised as the paper's evaluation asks (docs/results.md).
 struct MethodResult {
-  Method method = Method::s2kf;
+  pipeline::Method method = pipeline::Method::s2kf;
   int samples = 0;  ///< S2KF sample count; 0 for the baseline
-  TrackingRun run;
-  long converged_frame = -1;  ///< converged_frame(): the running median over 1 s below 1.5 x the median
-  double level_mm = 0;        ///< mean marker distance from converged_frame on
-  double worst_mm = 0;        ///< largest per-frame mean marker distance from converged_frame on
+  track::TrackingRun run;
+  long converged_frame = -1;  ///< track::converged_frame(): the running median over 1 s below 1.5 x the median
+  double level_mm = 0;        ///< mean marker distance from track::converged_frame on
+  double worst_mm = 0;        ///< largest per-frame mean marker distance from track::converged_frame on
   long worst_frame = -1;
   double worst_all_frames_mm = 0;                ///< largest per-frame distance over the whole recording
   double median_ms = 0, p99_ms = 0, max_ms = 0;  ///< latency per frame
   std::optional<TruthComparison> truth;          ///< when ground truth was given
 };
 
-MethodResult summarise(Method method, int samples, TrackingRun run, const Session& setup,
+MethodResult summarise(pipeline::Method method, int samples, track::TrackingRun run, const pipeline::Session& setup,
                        const io::MotionTable* truth, long warmup);
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE MethodResult summarise(Method method, int samples, TrackingRun run, const Session& setup,
+S2KF_INLINE MethodResult summarise(pipeline::Method method, int samples, track::TrackingRun run, const pipeline::Session& setup,
                                    const io::MotionTable* truth, long warmup) {
   MethodResult result;
   result.method = method;
-  result.samples = method == Method::s2kf ? samples : 0;
-  result.converged_frame = converged_frame(run.mean_marker_distance, frames_per_second(setup.rate_hz));
-  result.level_mm = result.converged_frame >= 0 ? mean_from(run.mean_marker_distance, result.converged_frame)
+  result.samples = method == pipeline::Method::s2kf ? samples : 0;
+  result.converged_frame = track::converged_frame(run.mean_marker_distance, track::frames_per_second(setup.rate_hz));
+  result.level_mm = result.converged_frame >= 0 ? track::mean_from(run.mean_marker_distance, result.converged_frame)
                                                 : std::numeric_limits<double>::quiet_NaN();
   const auto& d = run.mean_marker_distance;
   for (std::size_t k = 0; k < d.size(); ++k) {
@@ -176,9 +176,9 @@ S2KF_INLINE MethodResult summarise(Method method, int samples, TrackingRun run, 
   }
   std::vector<double> ms;
   for (double s : run.seconds) ms.push_back(1000 * s);
-  result.median_ms = quantile(ms, 0.5);
-  result.p99_ms = quantile(ms, 0.99);
-  result.max_ms = quantile(ms, 1.0);
+  result.median_ms = track::quantile(ms, 0.5);
+  result.p99_ms = track::quantile(ms, 0.99);
+  result.max_ms = track::quantile(ms, 1.0);
   if (truth) result.truth = compare_with_truth(setup.model, run.motion, *truth, warmup);
   result.run = std::move(run);
   return result;
@@ -187,15 +187,15 @@ S2KF_INLINE MethodResult summarise(Method method, int samples, TrackingRun run, 
 
 /// Tracks the recording with one method and summarises it; `truth` (optional) must have a row
 /// per frame of the recording with the model's joint columns.
-MethodResult evaluate_method(const Session& setup, const MarkerSequence& recording, Method method,
+MethodResult evaluate_method(const pipeline::Session& setup, const MarkerSequence& recording, pipeline::Method method,
                              int samples, const io::MotionTable* truth, long warmup,
                              const std::function<void(long)>& on_frame = {});
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE MethodResult evaluate_method(const Session& setup, const MarkerSequence& recording, Method method,
+S2KF_INLINE MethodResult evaluate_method(const pipeline::Session& setup, const MarkerSequence& recording, pipeline::Method method,
                                          int samples, const io::MotionTable* truth, long warmup,
                                          const std::function<void(long)>& on_frame) {
-  TrackingRun run = track_recording(setup, recording, recording, method, samples, nullptr, on_frame);
+  track::TrackingRun run = track_recording(setup, recording, recording, method, samples, nullptr, on_frame);
   return summarise(method, samples, std::move(run), setup, truth, warmup);
 }
 #endif
@@ -230,7 +230,7 @@ struct OcclusionOptions {
   int runs = 100;
   std::uint64_t seed = 1;  ///< run r uses the generator seeded with sim::derive_seed(seed, r)
   sim::RandomOcclusion occlusion{sim::kPaperOcclusionProbability, sim::kPaperOcclusionMeanFrames};
-  int samples = TrackerOptions{}.samples;
+  int samples = track::TrackerOptions{}.samples;
   bool baseline = true;  ///< also run the baseline on every occluded recording (it leaves hidden markers out)
 };
 
@@ -268,12 +268,12 @@ S2KF_INLINE MarkerSequence hide_points(const MarkerSequence& complete, const sim
 #endif
 
 /// `progress(run)` is called after each run. `warmup` frames are left out of the worst distance.
-OcclusionStudy occlusion_monte_carlo(const Session& setup, const MarkerSequence& complete,
+OcclusionStudy occlusion_monte_carlo(const pipeline::Session& setup, const MarkerSequence& complete,
                                      const OcclusionOptions& options, long warmup = 20,
                                      const std::function<void(int)>& progress = {});
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const Session& setup, const MarkerSequence& complete,
+S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const pipeline::Session& setup, const MarkerSequence& complete,
                                                  const OcclusionOptions& options, long warmup,
                                                  const std::function<void(int)>& progress) {
   if (options.runs < 1) throw std::invalid_argument("the occlusion study needs at least one run");
@@ -298,18 +298,18 @@ S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const Session& setup, const Mar
       study.max_hidden = std::max(study.max_hidden, count);
     }
     study.hidden.push_back(std::move(hidden));
-    auto track = [&](Method method, std::vector<std::vector<double>>& distances, std::vector<double>& levels,
+    auto track = [&](pipeline::Method method, std::vector<std::vector<double>>& distances, std::vector<double>& levels,
                      double& worst) {
       std::vector<double> distance;
       track_recording(setup, occluded, complete, method, options.samples, &distance);
-      levels.push_back(level_after_convergence(distance, frames_per_second(setup.rate_hz)));
+      levels.push_back(track::level_after_convergence(distance, track::frames_per_second(setup.rate_hz)));
       for (std::size_t k = static_cast<std::size_t>(std::max(0L, warmup)); k < distance.size(); ++k)
         if (std::isfinite(distance[k])) worst = std::max(worst, distance[k]);
       distances.push_back(std::move(distance));
     };
-    track(Method::s2kf, study.s2kf_distance, study.s2kf_level, study.s2kf_worst_mm);
+    track(pipeline::Method::s2kf, study.s2kf_distance, study.s2kf_level, study.s2kf_worst_mm);
     if (options.baseline)
-      track(Method::baseline, study.baseline_distance, study.baseline_level, study.baseline_worst_mm);
+      track(pipeline::Method::baseline, study.baseline_distance, study.baseline_level, study.baseline_worst_mm);
     if (progress) progress(r);
   }
   study.s2kf = band_over_runs(study.s2kf_distance);
@@ -326,22 +326,22 @@ S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const Session& setup, const Mar
 #endif
 
 /// Latency and accuracy of the S2KF for each sample count L on one recording.
-std::vector<MethodResult> sample_sweep(const Session& setup, const MarkerSequence& recording,
+std::vector<MethodResult> sample_sweep(const pipeline::Session& setup, const MarkerSequence& recording,
                                        const std::vector<int>& sample_counts, const io::MotionTable* truth,
                                        long warmup, const std::function<void(int)>& progress = {});
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE std::vector<MethodResult> sample_sweep(const Session& setup, const MarkerSequence& recording,
+S2KF_INLINE std::vector<MethodResult> sample_sweep(const pipeline::Session& setup, const MarkerSequence& recording,
                                                    const std::vector<int>& sample_counts,
                                                    const io::MotionTable* truth, long warmup,
                                                    const std::function<void(int)>& progress) {
   std::vector<MethodResult> results;
   for (int samples : sample_counts) {
-    results.push_back(evaluate_method(setup, recording, Method::s2kf, samples, truth, warmup));
+    results.push_back(evaluate_method(setup, recording, pipeline::Method::s2kf, samples, truth, warmup));
     if (progress) progress(samples);
   }
   return results;
 }
 #endif
 
-}  // namespace s2kf::track
+}  // namespace s2kf::evaluation

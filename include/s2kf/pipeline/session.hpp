@@ -17,11 +17,11 @@
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/track/height_estimate.hpp>
-#include <s2kf/track/marker_set_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/stage_times.hpp>
-#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
@@ -43,7 +43,7 @@
 #include <utility>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::pipeline {
 
 /// Below this many millimetres every coordinate is a body's; beyond, the file's units or scale are
 /// wrong (a kilometre).
@@ -53,7 +53,7 @@ inline constexpr double kAbsurdCoordinateMm = 1e6;
 inline bool plausible_height_mm(double mm) { return mm > 300 && mm < 3000; }
 
 struct SessionOptions {
-  TrackerOptions tracker;  ///< a preset expanded (preset_options), samples included
+  track::TrackerOptions tracker;  ///< a preset expanded (track::preset_options), samples included
   double height_mm = 0;    ///< > 0: given; else the marker set's height, else estimated
   /// When no height can be estimated (no two markers on one segment): this height with a warning,
   /// or 0 to refuse the recording.
@@ -65,8 +65,8 @@ struct SessionOptions {
   /// recording while the calibration's cost stays bounded whatever the recording's length.
   std::int64_t calibration_frames = 1200;
   int calibration_windows = 4;
-  CalibrationOptions calibration = [] {
-    CalibrationOptions options;
+  calibration::CalibrationOptions calibration = [] {
+    calibration::CalibrationOptions options;
     options.final_pass = false;  // the run's own first frames give the calibrated distance
     return options;
   }();
@@ -92,22 +92,22 @@ struct SessionOptions {
 struct Session {
   body::MarkerSet marker_set;
   body::BodyModel model;  ///< the set applied, scaled to the subject, calibrated when asked
-  MarkerMapping mapping;  ///< recording points -> model markers
+  body::MarkerMapping mapping;  ///< recording points -> model markers
   /// Which segments the mapped markers observe; joints of segments no marker informs are written
   /// as NaN by run_session.
-  SegmentObservation segments;
-  TrackerOptions tracker;  ///< with the set's per-marker noise
+  track::SegmentObservation segments;
+  track::TrackerOptions tracker;  ///< with the set's per-marker noise
   double rate_hz = 0;
   double height_mm = 0;
   std::string
       height_source;  ///< "given", "from the marker-set file", "estimated from N rigid marker pairs", ...
-  std::optional<SubjectCalibration> calibration;  ///< when calibrated
+  std::optional<calibration::SubjectCalibration> calibration;  ///< when calibrated
   std::int64_t calibration_frames = 0;            ///< frames the calibration used
   Eigen::Index calibration_sample_count = 0;      ///< samples of the calibration's tracking pass
   /// The stretches of the recording it used: (first frame, frame count).
   std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches;
   std::vector<std::string> warnings;  ///< the marker set's and the preparation's
-  StageTimes times;                   ///< read, height and calibration: the preparation's
+  track::StageTimes times;                   ///< read, height and calibration: the preparation's
 
   int markers_used() const { return mapping.markers_used(); }
 };
@@ -179,7 +179,7 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
   const body::BodyModel base = body::mmm_body_model(set.reference_height_mm);
   body::BodyModel model = body::apply_marker_set(base, set);
   session.warnings = body::marker_set_warnings(base, model);
-  session.mapping = map_marker_set(source.labels(), set);
+  session.mapping = body::map_marker_set(source.labels(), set);
   session.tracker = options.tracker;
   session.tracker.marker_noise_mm_per_marker = marker_noise_of(set);
   const int used = session.mapping.markers_used();
@@ -188,7 +188,7 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
         "none of its " + std::to_string(source.labels().size()) +
         " point labels is a marker of the marker set " + set.name + " (expected names such as " +
         (set.entries.empty() ? std::string("none") : set.entries.front().label) + ")");
-  session.segments = observe_segments(model, session.mapping);
+  session.segments = track::observe_segments(model, session.mapping);
   if (session.segments.markers[0] == used)
     throw std::invalid_argument("only the pelvis carries markers of the marker set " + set.name + " (" +
                                 std::to_string(used) +
@@ -211,12 +211,12 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
   // The rigid marker pairs measure the body in the file's coordinates: they give the height when
   // none is given, and check the units against a given one. Their time is kept apart from the
   // reads'.
-  const std::optional<HeightEstimate> geometric = [&]() {
-    TimedFrameSource timed(source, session.times.read);
+  const std::optional<calibration::HeightEstimate> geometric = [&]() {
+    track::TimedFrameSource timed(source, session.times.read);
     const double read_before = session.times.read;
     const auto start = std::chrono::steady_clock::now();
-    std::optional<HeightEstimate> estimate = estimate_height(timed, model, session.mapping);
-    session.times.height = seconds_since(start) - (session.times.read - read_before);
+    std::optional<calibration::HeightEstimate> estimate = calibration::estimate_height(timed, model, session.mapping);
+    session.times.height = track::seconds_since(start) - (session.times.read - read_before);
     return estimate;
   }();
   if (options.height_mm > 0) {
@@ -239,7 +239,7 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
     throw std::invalid_argument("the body height cannot be estimated from the markers; give --height");
   }
   if (geometric)
-    if (const std::string problem = units_problem(geometric->mm, session.height_mm, session.height_source);
+    if (const std::string problem = calibration::units_problem(geometric->mm, session.height_mm, session.height_source);
         !problem.empty())
       throw std::invalid_argument(problem);
   if (!plausible_height_mm(session.height_mm))
@@ -254,12 +254,12 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
       throw std::invalid_argument("the calibration's sample set has " +
                                   std::to_string(calibration_samples.dimension()) +
                                   " dimensions but the tracker's " + std::to_string(samples.dimension()));
-    CalibrationOptions calibration = options.calibration;
+    calibration::CalibrationOptions calibration = options.calibration;
     calibration.marker_weight = calibration_weights(set, session.tracker.marker_noise_mm);
     session.calibration_stretches =
         calibration_stretches(source.frame_count(), options.calibration_frames, options.calibration_windows);
     try {
-      TimedFrameSource timed(source, session.times.read);
+      track::TimedFrameSource timed(source, session.times.read);
       MarkerSequence frames;
       for (const auto& [first, count] : session.calibration_stretches) {
         const MarkerSequence stretch = read_frames(timed, first, count);
@@ -276,9 +276,9 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
       session.calibration_frames = frames.frame_count();
       session.calibration_sample_count = calibration_samples.count();
       const auto start = std::chrono::steady_clock::now();
-      session.calibration = calibrate_subject(session.model, session.mapping, session.tracker, frames,
+      session.calibration = calibration::calibrate_subject(session.model, session.mapping, session.tracker, frames,
                                               calibration_samples, calibration);
-      session.times.calibration = seconds_since(start);
+      session.times.calibration = track::seconds_since(start);
       session.model = session.calibration->model;
       if (options.noise_from_calibration)
         session.tracker.marker_noise_mm_per_marker = marker_noise_from_residuals(
@@ -301,7 +301,7 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
 
 /// One warning per marker the tracker left out of more than 1 % of the frames, with the reason:
 /// a stuck marker or a labelling fault is then named, not averaged into the pose.
-inline void warn_about_rejected_markers(const body::BodyModel& model, TrackingRun& run) {
+inline void warn_about_rejected_markers(const body::BodyModel& model, track::TrackingRun& run) {
   for (std::size_t m = 0; m < run.rejected_by_innovation.size(); ++m) {
     const long innovation = run.rejected_by_innovation[m], frozen = run.rejected_as_frozen[m];
     if (100 * (innovation + frozen) <= run.frames) continue;
@@ -325,7 +325,7 @@ struct RunOptions {
   /// Rauch-Tung-Striebel smoothing after the filter (S2KF only): every frame's posterior is kept
   /// (TrackingSmoother::kBytesPerFrame each) and the rows go to the sink after the backward pass.
   bool smooth = false;
-  bool keep_predicted_markers = false;  ///< TrackingRun::predicted_markers (evaluation)
+  bool keep_predicted_markers = false;  ///< track::TrackingRun::predicted_markers (evaluation)
 };
 
 /// Hooks of a run, each optional.
@@ -335,27 +335,27 @@ struct RunHooks {
   /// Called after every frame with its 0-based index: progress.
   std::function<void(long)> on_frame;
   /// Receives every row; without a sink the run keeps the whole motion table (TrackingRun).
-  FrameSink sink;
+  track::FrameSink sink;
 };
 
 /// Runs a prepared session over every frame of `source`. A coordinate beyond a kilometre stops the
 /// run with std::invalid_argument (the file's units or scale are wrong). With a sink, memory stays
 /// constant in the recording's length (unless smoothing); TrackingRun keeps the per-frame series.
 /// TrackingRun::times has the seconds spent reading, tracking, smoothing and in the sink (writing).
-TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
+track::TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
                         const RunOptions& options = {}, const RunHooks& hooks = {});
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
+S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
                                     const RunOptions& options, const RunHooks& hooks) {
   if (options.smooth && options.method != Method::s2kf)
     throw std::invalid_argument("smoothing works on the S2KF's estimates, not the baseline's");
-  StageTimes times;
-  TimedFrameSource timed_source(source, times.read);
+  track::StageTimes times;
+  track::TimedFrameSource timed_source(source, times.read);
   std::int64_t next = 0;
   std::string bad_coordinates;
   std::vector<int> point_segment;  // per recording point: the segment its marker rides on, or -1
-  SegmentObservation observed = observe_segments(session.model, session.mapping, &point_segment);
+  track::SegmentObservation observed = track::observe_segments(session.model, session.mapping, &point_segment);
   const auto next_frame = [&](MarkerFrame& frame) {
     if (!timed_source.read(next, frame)) return false;
     ++next;
@@ -371,15 +371,15 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
     if (hooks.on_read) hooks.on_read(frame);
     return true;
   };
-  FrameSink timed_sink;
+  track::FrameSink timed_sink;
   if (hooks.sink)
-    timed_sink = [&](const TrackedFrame& frame) {
+    timed_sink = [&](const track::TrackedFrame& frame) {
       const auto start = std::chrono::steady_clock::now();
       hooks.sink(frame);
-      times.writing += seconds_since(start);
+      times.writing += track::seconds_since(start);
     };
   // The tracking stage is the tracker's own time per frame (hooks and bookkeeping apart).
-  const auto with_times = [&](TrackingRun run) {
+  const auto with_times = [&](track::TrackingRun run) {
     times.tracking = 0;
     for (double seconds : run.seconds) times.tracking += seconds;
     run.times = times;
@@ -392,47 +392,47 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
   const auto blank = [&unobserved](auto&& row) {
     for (int j : unobserved) row(body::kRootValues + j) = std::numeric_limits<double>::quiet_NaN();
   };
-  FrameSink sink = timed_sink;
+  track::FrameSink sink = timed_sink;
   Eigen::VectorXd blanked;
   if (sink && !unobserved.empty())
-    sink = [&](const TrackedFrame& f) {
+    sink = [&](const track::TrackedFrame& f) {
       blanked = f.values;
       blank(blanked);
-      timed_sink(TrackedFrame{f.index, f.frame, f.time, blanked, f.mean_marker_distance, f.visible_markers,
+      timed_sink(track::TrackedFrame{f.index, f.frame, f.time, blanked, f.mean_marker_distance, f.visible_markers,
                               f.estimate});
     };
-  const auto blank_table = [&](TrackingRun& run) {
+  const auto blank_table = [&](track::TrackingRun& run) {
     for (Eigen::Index r = 0; r < run.motion.values.rows(); ++r) blank(run.motion.values.row(r));
   };
   if (options.method == Method::baseline) {
-    GradientBaseline baseline(session.model, session.mapping);
-    TrackingRun run = run_tracking(baseline, next_frame, session.rate_hz, joint_names,
+    track::GradientBaseline baseline(session.model, session.mapping);
+    track::TrackingRun run = track::run_tracking(baseline, next_frame, session.rate_hz, joint_names,
                                    options.keep_predicted_markers, hooks.on_frame, sink);
     blank_table(run);
     run.segments = observed;
     return with_times(std::move(run));
   }
-  Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
+  track::Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
   if (!options.smooth) {
-    TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
+    track::TrackingRun run = track::run_tracking(tracker, next_frame, session.rate_hz, joint_names,
                                    options.keep_predicted_markers, hooks.on_frame, sink);
     blank_table(run);
     run.segments = observed;
     warn_about_rejected_markers(session.model, run);
     return with_times(std::move(run));
   }
-  TrackingSmoother smoother(tracker);
+  track::TrackingSmoother smoother(tracker);
   const auto on_frame = [&](long index) {
     const auto start = std::chrono::steady_clock::now();
     smoother.record(tracker, index);
-    times.smoothing += seconds_since(start);
+    times.smoothing += track::seconds_since(start);
     if (hooks.on_frame) hooks.on_frame(index);
   };
-  TrackingRun run = run_tracking(tracker, next_frame, session.rate_hz, joint_names,
+  track::TrackingRun run = track::run_tracking(tracker, next_frame, session.rate_hz, joint_names,
                                  options.keep_predicted_markers, on_frame);
   const auto start = std::chrono::steady_clock::now();
   smoother.smooth(run.motion);
-  times.smoothing += seconds_since(start);
+  times.smoothing += track::seconds_since(start);
   blank_table(run);
   run.segments = observed;
   warn_about_rejected_markers(session.model, run);
@@ -440,7 +440,7 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
     for (Eigen::Index r = 0; r < run.motion.frames(); ++r) {
       const auto f = static_cast<std::size_t>(r);
       const Eigen::VectorXd values = run.motion.values.row(r).transpose();
-      timed_sink(TrackedFrame{static_cast<long>(r), run.motion.frame[f], run.motion.time[f], values,
+      timed_sink(track::TrackedFrame{static_cast<long>(r), run.motion.frame[f], run.motion.time[f], values,
                               run.mean_marker_distance[f], run.visible_markers[f], nullptr});
     }
   return with_times(std::move(run));
@@ -451,15 +451,15 @@ S2KF_INLINE TrackingRun run_session(const Session& session, FrameSource& source,
 /// itself: the tracker is causal, so the run's first frames are what a final calibration pass
 /// would track (its first skip_frames tracked frames, the convergence, are left out). NaN when the
 /// session was not calibrated or nothing was measured there.
-double calibrated_distance_mm(const Session& session, const TrackingRun& run);
+double calibrated_distance_mm(const Session& session, const track::TrackingRun& run);
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE double calibrated_distance_mm(const Session& session, const TrackingRun& run) {
+S2KF_INLINE double calibrated_distance_mm(const Session& session, const track::TrackingRun& run) {
   if (!session.calibration) return std::numeric_limits<double>::quiet_NaN();
   const auto& distance = run.mean_marker_distance;
   std::size_t first = 0;
   while (first < distance.size() && !std::isfinite(distance[first])) ++first;
-  const std::size_t from = first + static_cast<std::size_t>(CalibrationOptions{}.skip_frames);
+  const std::size_t from = first + static_cast<std::size_t>(calibration::CalibrationOptions{}.skip_frames);
   double sum = 0;
   long count = 0;
   for (const auto& [start, length] : session.calibration_stretches)
@@ -496,4 +496,4 @@ S2KF_INLINE std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stret
 
 #endif  // S2KF_DEFINE_HEAVY
 
-}  // namespace s2kf::track
+}  // namespace s2kf::pipeline

@@ -8,7 +8,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-namespace s2kf::track {
+namespace s2kf::geometry {
 
 struct RigidTransform {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
@@ -29,4 +29,4 @@ S2KF_INLINE RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, con
 }
 #endif
 
-}  // namespace s2kf::track
+}  // namespace s2kf::geometry

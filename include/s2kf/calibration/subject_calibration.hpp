@@ -13,7 +13,7 @@
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/marker_sequence.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
@@ -35,7 +35,7 @@
 #include <utility>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::calibration {
 
 struct CalibrationOptions {
   /// Rounds of (track the recording with the current model, then bundle-adjust poses and subject).
@@ -231,7 +231,7 @@ struct BundleFrame {
 
 /// RMS distance (mm) per model marker between the recording and `model` at the frames' poses,
 /// over each frame's listed markers (indices into `used`); NaN for a marker no frame lists.
-inline std::vector<double> marker_residual_rms(const body::BodyModel& model, const MarkerMapping& mapping,
+inline std::vector<double> marker_residual_rms(const body::BodyModel& model, const body::MarkerMapping& mapping,
                                                const MarkerSequence& recording, const std::vector<int>& used,
                                                const std::vector<BundleFrame>& frames) {
   std::vector<double> sum(static_cast<std::size_t>(model.marker_count()), 0.0);
@@ -257,7 +257,7 @@ inline std::vector<double> marker_residual_rms(const body::BodyModel& model, con
 /// `used`) the recording shows there and, with `static_prior`, the static trial's prior at the zero
 /// pose; frames with fewer than 3 such markers are left out. Throws std::invalid_argument for a
 /// frame outside the recording or a pose with another joint count than `joint_count`.
-inline std::vector<BundleFrame> frames_at_poses(const MarkerMapping& mapping, const MarkerSequence& recording,
+inline std::vector<BundleFrame> frames_at_poses(const body::MarkerMapping& mapping, const MarkerSequence& recording,
                                                 const std::vector<int>& used,
                                                 const std::vector<std::pair<long, body::Pose>>& poses,
                                                 Eigen::Index joint_count, bool static_prior) {
@@ -284,8 +284,8 @@ inline std::vector<BundleFrame> frames_at_poses(const MarkerMapping& mapping, co
 /// Tracks all frames; returns the poses of the frames usable for calibration and the pass's mean
 /// marker distance after convergence. The stretches (split at options.restart_frames) are
 /// independent, each tracked by a tracker of its own, on up to options.threads threads.
-inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const MarkerMapping& mapping,
-                                           const TrackerOptions& tracker_options,
+inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const body::MarkerMapping& mapping,
+                                           const track::TrackerOptions& tracker_options,
                                            const MarkerSequence& recording, const SampleSet& samples,
                                            const CalibrationOptions& options, double& mean_distance) {
   std::vector<long> bounds{0};
@@ -307,16 +307,16 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const M
   // the poses follow the markers closely: with the tracker's slower walk for the other joints the
   // real test1 and HDM05 recordings' subjects came out tracking 6.0 and 14.4 mm instead of 4.4 and
   // 10.9 (docs/tracking.md).
-  TrackerOptions pass_options = tracker_options;
+  track::TrackerOptions pass_options = tracker_options;
   pass_options.information_form_update = false;
   pass_options.joint_speed_per_s = std::max(pass_options.joint_speed_per_s, pass_options.flexion_speed_per_s);
   for_each_chunk(static_cast<int>(stretches.size()), options.threads, [&](int s) {
     Stretch& stretch = stretches[static_cast<std::size_t>(s)];
-    Tracker tracker(model, mapping, pass_options, recording.rate_hz, samples);
+    track::Tracker tracker(model, mapping, pass_options, recording.rate_hz, samples);
     MarkerFrame input;
     for (long f = bounds[static_cast<std::size_t>(s)]; f < bounds[static_cast<std::size_t>(s) + 1]; ++f) {
       recording.read_frame(f, input);
-      const FrameEstimate& estimate = tracker.process(input.positions, input.visible);
+      const track::FrameEstimate& estimate = tracker.process(input.positions, input.visible);
       stretch.distance.push_back(estimate.mean_marker_distance);
       if (!estimate.tracked) continue;
       if (stretch.started < 0) stretch.started = static_cast<long>(stretch.distance.size()) - 1;
@@ -355,7 +355,7 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const M
 /// the start, which the prior pulls towards 1.
 class BundleAdjustment {
  public:
-  BundleAdjustment(const body::BodyModel& start, const MarkerMapping& mapping,
+  BundleAdjustment(const body::BodyModel& start, const body::MarkerMapping& mapping,
                    const MarkerSequence& recording, const CalibrationOptions& options, double noise_variance)
       : start_(start),
         mapping_(mapping),
@@ -848,7 +848,7 @@ class BundleAdjustment {
   }
 
   const body::BodyModel& start_;
-  const MarkerMapping& mapping_;
+  const body::MarkerMapping& mapping_;
   const MarkerSequence& recording_;
   const CalibrationOptions& options_;
   std::vector<std::string> segments_;
@@ -872,8 +872,8 @@ class BundleAdjustment {
 /// frame's pose, leaves out outlying residuals, and bundle-adjusts those poses together with the
 /// bone-length factors and marker offsets. Markers the recording never shows keep their offsets.
 /// Joint limits are not touched, and the adjusted poses stay inside them.
-SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerMapping& mapping,
-                                     const TrackerOptions& tracker_options, const MarkerSequence& recording,
+SubjectCalibration calibrate_subject(const body::BodyModel& model, const body::MarkerMapping& mapping,
+                                     const track::TrackerOptions& tracker_options, const MarkerSequence& recording,
                                      const SampleSet& samples, const CalibrationOptions& options = {});
 
 /// The calibration's bundle adjustment alone, started at given poses instead of a tracking pass's:
@@ -884,15 +884,15 @@ SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerM
 /// options.static_pose_sd_rad > 0 every frame's joint angles get the static trial's prior at the
 /// zero pose, as in calibrate_subject. The result has the adjusted model, its length factors, its
 /// per-marker residuals and one pass; frames with fewer than 3 markers are skipped.
-SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model, const MarkerMapping& mapping,
-                                           const TrackerOptions& tracker_options,
+SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model, const body::MarkerMapping& mapping,
+                                           const track::TrackerOptions& tracker_options,
                                            const MarkerSequence& recording,
                                            const std::vector<std::pair<long, body::Pose>>& poses,
                                            const CalibrationOptions& options = {});
 
 #if S2KF_DEFINE_HEAVY
-S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, const MarkerMapping& mapping,
-                                                 const TrackerOptions& tracker_options,
+S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, const body::MarkerMapping& mapping,
+                                                 const track::TrackerOptions& tracker_options,
                                                  const MarkerSequence& recording, const SampleSet& samples,
                                                  const CalibrationOptions& options) {
   options.validate();
@@ -944,7 +944,7 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
         all.push_back(distances[k][u]);
       }
     }
-    const double threshold = std::max(options.outlier_floor_mm, 4.0 * quantile(all, 0.5));
+    const double threshold = std::max(options.outlier_floor_mm, 4.0 * track::quantile(all, 0.5));
     std::vector<detail::BundleFrame> kept;
     for (std::size_t k = 0; k < frames.size(); ++k) {
       for (std::size_t u = 0; u < used.size(); ++u) {
@@ -971,8 +971,8 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
 }
 
 S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model,
-                                                       const MarkerMapping& mapping,
-                                                       const TrackerOptions& tracker_options,
+                                                       const body::MarkerMapping& mapping,
+                                                       const track::TrackerOptions& tracker_options,
                                                        const MarkerSequence& recording,
                                                        const std::vector<std::pair<long, body::Pose>>& poses,
                                                        const CalibrationOptions& options) {
@@ -999,4 +999,4 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
 }
 #endif
 
-}  // namespace s2kf::track
+}  // namespace s2kf::calibration

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::evaluation {
 
 struct TruthComparison {
   long frames = 0;  ///< frames compared (after the warm-up, both finite)
@@ -120,4 +120,4 @@ S2KF_INLINE TruthComparison compare_with_truth(const body::BodyModel& model, con
 }
 #endif
 
-}  // namespace s2kf::track
+}  // namespace s2kf::evaluation

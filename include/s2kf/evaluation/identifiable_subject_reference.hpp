@@ -17,8 +17,8 @@
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/track/marker_mapping.hpp>
-#include <s2kf/track/subject_calibration.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
@@ -28,13 +28,13 @@
 #include <utility>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::evaluation {
 
 /// The frames of a recording the calibration adjusts: in each stretch (first frame, count) it
 /// reads, every options.stride-th frame from options.skip_frames after the stretch's start (the
 /// tracker starts afresh at each stretch).
 inline std::vector<long> calibration_frame_indices(
-    const std::vector<std::pair<std::int64_t, std::int64_t>>& stretches, const CalibrationOptions& options) {
+    const std::vector<std::pair<std::int64_t, std::int64_t>>& stretches, const calibration::CalibrationOptions& options) {
   std::vector<long> frames;
   for (const auto& [first, count] : stretches)
     for (std::int64_t k = options.skip_frames; k < count; k += options.stride)
@@ -63,7 +63,7 @@ struct IdentifiableSubject {
 /// the nominal.
 IdentifiableSubject identifiable_subject(const body::BodyModel& nominal, const sim::Subject& subject,
                                          const sim::Recording& recording, const std::vector<long>& frames,
-                                         const CalibrationOptions& options, double marker_noise_mm,
+                                         const calibration::CalibrationOptions& options, double marker_noise_mm,
                                          double prior_only_fraction);
 
 #if S2KF_DEFINE_HEAVY
@@ -71,7 +71,7 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
                                                      const sim::Subject& subject,
                                                      const sim::Recording& recording,
                                                      const std::vector<long>& frames,
-                                                     const CalibrationOptions& options,
+                                                     const calibration::CalibrationOptions& options,
                                                      double marker_noise_mm, double prior_only_fraction) {
   const body::BodyModel& truth = subject.model;
   if (nominal.marker_names() != truth.marker_names() || nominal.joint_names() != truth.joint_names())
@@ -84,9 +84,9 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
     throw std::invalid_argument(
         "identifiable_subject: the marker noise must be positive, the threshold >= 0");
   options.validate();
-  MarkerMapping mapping;
+  body::MarkerMapping mapping;
   for (int m = 0; m < truth.marker_count(); ++m) mapping.point_of_marker.push_back(m);
-  detail::BundleAdjustment adjustment(nominal, mapping, recording, options,
+  calibration::detail::BundleAdjustment adjustment(nominal, mapping, recording, options,
                                       marker_noise_mm * marker_noise_mm);
 
   // The calibration frames at their true poses, each with its visible markers.
@@ -96,8 +96,8 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
       throw std::invalid_argument("identifiable_subject: a calibration frame lies outside the recording");
     poses.emplace_back(k, recording.truth[static_cast<std::size_t>(k)]);
   }
-  std::vector<detail::BundleFrame> adjusted =
-      detail::frames_at_poses(mapping, recording, adjustment.used(), poses, truth.joint_count(), false);
+  std::vector<calibration::detail::BundleFrame> adjusted =
+      calibration::detail::frames_at_poses(mapping, recording, adjustment.used(), poses, truth.joint_count(), false);
   if (adjusted.empty())
     throw std::invalid_argument("identifiable_subject: no calibration frame shows 3 markers");
 
@@ -153,4 +153,4 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
 }
 #endif
 
-}  // namespace s2kf::track
+}  // namespace s2kf::evaluation

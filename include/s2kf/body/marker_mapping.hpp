@@ -2,14 +2,14 @@
 /// Mapping the point labels of a recording to the markers of a body model, by name.
 #pragma once
 
-#include <s2kf/core/label_text.hpp>
+#include <s2kf/body/label_text.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <string>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::body {
 
 /// Which recording point feeds which model marker. Recording labels the model does not know are
 /// listed in `ignored_labels`; model markers without a recording point are never observed.
@@ -50,4 +50,4 @@ inline MarkerMapping map_markers(const std::vector<std::string>& recording_label
   return mapping;
 }
 
-}  // namespace s2kf::track
+}  // namespace s2kf::body

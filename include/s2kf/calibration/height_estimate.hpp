@@ -8,7 +8,7 @@
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/frame_source.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 
 #include <Eigen/Core>
 
@@ -22,14 +22,14 @@
 #include <utility>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::calibration {
 
 /// Collects, frame by frame, the distance ratios of every visible pair of mapped markers that ride
 /// on the same frame of the model (at least 50 mm apart in the model, so noise stays small), and
 /// returns model height x median ratio. Without any such pair it returns nothing.
 class HeightEstimator {
  public:
-  HeightEstimator(const body::BodyModel& model, MarkerMapping mapping)
+  HeightEstimator(const body::BodyModel& model, body::MarkerMapping mapping)
       : mapping_(std::move(mapping)), height_(model.height_mm) {
     const Eigen::Matrix3Xd zero = body::marker_positions(model, body::zero_pose(model));
     for (int a = 0; a < model.marker_count(); ++a)
@@ -53,7 +53,7 @@ class HeightEstimator {
     int a, b;
     double model_distance;
   };
-  MarkerMapping mapping_;
+  body::MarkerMapping mapping_;
   double height_;
   std::vector<Pair> pairs_;
   std::vector<double> ratios_;
@@ -68,11 +68,11 @@ struct HeightEstimate {
 /// The body height from up to `max_frames` frames spread evenly through the source; nothing when
 /// the mapped markers form no rigid pair.
 std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
-                                              const MarkerMapping& mapping, std::int64_t max_frames = 200);
+                                              const body::MarkerMapping& mapping, std::int64_t max_frames = 200);
 
 #if S2KF_DEFINE_HEAVY
 S2KF_INLINE std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
-                                                          const MarkerMapping& mapping,
+                                                          const body::MarkerMapping& mapping,
                                                           std::int64_t max_frames) {
   HeightEstimator estimator(model, mapping);
   const std::int64_t frames = source.frame_count();
@@ -135,4 +135,4 @@ S2KF_INLINE std::optional<double> HeightEstimator::height_mm() const {
 
 #endif  // S2KF_DEFINE_HEAVY
 
-}  // namespace s2kf::track
+}  // namespace s2kf::calibration

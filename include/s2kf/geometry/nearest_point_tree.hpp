@@ -11,7 +11,7 @@
 #include <numeric>
 #include <vector>
 
-namespace s2kf::track {
+namespace s2kf::geometry {
 
 class NearestPointTree {
  public:
@@ -88,4 +88,4 @@ class NearestPointTree {
   std::vector<int> axis_;               ///< per tree position, the axis its node splits
 };
 
-}  // namespace s2kf::track
+}  // namespace s2kf::geometry
