@@ -2,9 +2,9 @@
 // evaluated for all samples in one call, compared with the UKF-sized set.
 //   ./build/examples/example_polar_to_cartesian
 #include <s2kf/core/gaussian.hpp>
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
+#include <s2kf/io/sample_cache.hpp>
 
 #include <cmath>
 #include <cstdio>

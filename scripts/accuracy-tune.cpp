@@ -3,14 +3,14 @@
 // the labels, calibration unless 0), with the tracker's motion model and noise levels given on the
 // command line; prints the accuracy against the truth after 20 frames (and the true-subject
 // reference when asked). Not built by CMake; build it from the repository root with
-//   g++ -O2 -DNDEBUG -std=c++17 -Iinclude -Iexamples/s2kf -isystem /usr/include/eigen3 \
-//     -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp examples/s2kf/tracker_samples.cpp -o
+//   g++ -O2 -DNDEBUG -std=c++17 -Iinclude -Iapps/s2kf -isystem /usr/include/eigen3 \
+//     -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp apps/s2kf/tracker_samples.cpp -o
 //     accuracy-tune
 // or, faster, against the compiled library (`cmake --build build --target s2kf_compiled`; the same
 // -march=native as that library, or Eigen's objects differ in layout and the program crashes):
-//   g++ -O2 -march=native -DNDEBUG -std=c++17 -DS2KF_COMPILED -Iinclude -Iexamples/s2kf \
+//   g++ -O2 -march=native -DNDEBUG -std=c++17 -DS2KF_COMPILED -Iinclude -Iapps/s2kf \
 //     -isystem /usr/include/eigen3 -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp \
-//     examples/s2kf/tracker_samples.cpp build/libs2kf_compiled.a -lpthread -o build/accuracy-tune
+//     apps/s2kf/tracker_samples.cpp build/libs2kf_compiled.a -lpthread -o build/accuracy-tune
 // Usage: accuracy-tune MOTION SEED OCCLUSION(0|1) SMOOTH(0|1) CALIBRATE(0|1) rw|cv
 //          [POSITION_ACC ORIENTATION_ACC JOINT_ACC POSITION_SPEED ORIENTATION_SPEED JOINT_SPEED
 //           REFERENCE(0|1) [INITIAL_RATE_SDS x3]]

@@ -5,7 +5,7 @@
 #include "data_directory.hpp"
 #include "numpy_bridge.hpp"
 
-#include "motion_json.hpp"  // examples/s2kf: the motion-file reader the CLI uses
+#include "motion_json.hpp"  // apps/s2kf: the motion-file reader the CLI uses
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/sim/recording.hpp>

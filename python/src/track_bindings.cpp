@@ -8,9 +8,9 @@
 #include "streaming_tracker.hpp"
 #include "track_pipeline.hpp"
 
-#include "calibrated_subject.hpp"  // examples/s2kf: the calibration `s2kf calibrate` runs
+#include "calibrated_subject.hpp"  // apps/s2kf: the calibration `s2kf calibrate` runs
 
-#include "command.hpp"  // examples/s2kf: the program's error type, cli::UserError
+#include "command.hpp"  // apps/s2kf: the program's error type, cli::UserError
 
 #include <s2kf/io/sample_cache.hpp>
 #include <s2kf/io/atomic_file.hpp>

@@ -1,9 +1,9 @@
 // s2kf.track's work without Python (track_pipeline.hpp).
 #include "track_pipeline.hpp"
 
-#include "calibrated_subject.hpp"  // examples/s2kf: a subject calibrated on a static trial
-#include "marker_set_json.hpp"     // examples/s2kf: bundled marker sets, the automatic choice, messages
-#include "track_summary.hpp"       // examples/s2kf: the summary `s2kf track` writes
+#include "calibrated_subject.hpp"  // apps/s2kf: a subject calibrated on a static trial
+#include "marker_set_json.hpp"     // apps/s2kf: bundled marker sets, the automatic choice, messages
+#include "track_summary.hpp"       // apps/s2kf: the summary `s2kf track` writes
 
 #include <s2kf/io/sample_cache.hpp>
 #include <s2kf/track/tracking_smoother.hpp>

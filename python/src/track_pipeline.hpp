@@ -46,7 +46,7 @@ struct TrackResult {
   Eigen::Index point_count = 0;
 };
 
-/// The pipeline of `s2kf track` (examples/s2kf/command_track.cpp, track_file) without its files:
+/// The pipeline of `s2kf track` (apps/s2kf/command_track.cpp, track_file) without its files:
 /// marker-set choice, session, run, summary. `input` names the recording in messages and the
 /// summary; `raw_labels` (empty, or one per point) give model outputs their names in the ignored
 /// list; `file_warnings` are the C3D reader's. Runs without the GIL; errors are std exceptions

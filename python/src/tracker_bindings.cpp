@@ -7,7 +7,7 @@
 #include "numpy_bridge.hpp"
 #include "streaming_tracker.hpp"
 
-#include "marker_set_json.hpp"  // examples/s2kf: bundled marker sets and marker-set files
+#include "marker_set_json.hpp"  // apps/s2kf: bundled marker sets and marker-set files
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/io/sample_cache.hpp>

@@ -1,6 +1,6 @@
 // `s2kf calibrate`: writes a subject file that loads as a marker set and is taken back as
 // --markerset, and names an unknown set.
-#include "../../examples/s2kf/marker_set_json.hpp"
+#include "../../apps/s2kf/marker_set_json.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>

@@ -19,8 +19,8 @@
 #include <s2kf/evaluation/true_subject_reference.hpp>
 #include <s2kf/evaluation/truth_metrics.hpp>
 
-#include "../../examples/s2kf/marker_set_json.hpp"
-#include "../../examples/s2kf/motion_json.hpp"
+#include "../../apps/s2kf/marker_set_json.hpp"
+#include "../../apps/s2kf/motion_json.hpp"
 
 #include "cli_runner.hpp"
 

@@ -1,7 +1,7 @@
 // `s2kf markerset infer`: a set inferred for a recording with scrambled labels, written, used by
 // `s2kf track` when no bundled set fits, found again by `s2kf view`; one rigid object is refused and
 // nothing is written.
-#include "../../examples/s2kf/marker_set_json.hpp"
+#include "../../apps/s2kf/marker_set_json.hpp"
 
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/io/c3d_reader.hpp>

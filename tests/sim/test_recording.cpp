@@ -5,7 +5,7 @@
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
 
-#include "../../examples/s2kf/motion_json.hpp"
+#include "../../apps/s2kf/motion_json.hpp"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 // accuracy against the truth. Partial sets: the joints no marker informs are written as not
 // observed (NaN), reported with the reason, and carry a large posterior uncertainty; a recording
 // that shows nothing but the pelvis is refused.
-#include "../../examples/s2kf/marker_set_json.hpp"
+#include "../../apps/s2kf/marker_set_json.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>

@@ -17,7 +17,7 @@
 #include <s2kf/evaluation/true_subject_reference.hpp>
 #include <s2kf/evaluation/truth_metrics.hpp>
 
-#include "../../examples/s2kf/motion_json.hpp"
+#include "../../apps/s2kf/motion_json.hpp"
 #include "test_files.hpp"
 
 #include "tracked_recording.hpp"

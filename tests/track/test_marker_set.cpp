@@ -1,6 +1,6 @@
 // Marker sets as data: parsing and validation, applying a set to the model, choosing the set that
 // fits a recording, and the subject file `s2kf calibrate` writes.
-#include "../../examples/s2kf/marker_set_json.hpp"
+#include "../../apps/s2kf/marker_set_json.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>

@@ -6,7 +6,7 @@
 #include <s2kf/body/label_text.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
 
-#include "../../examples/s2kf/marker_set_json.hpp"
+#include "../../apps/s2kf/marker_set_json.hpp"
 
 #include <gtest/gtest.h>
 

@@ -230,57 +230,8 @@ Eigen::MatrixXd marker_noise(double variance_mm2, Eigen::Index marker_count);
 /// Diagonal measurement noise R (3 M x 3 M) with one variance (mm^2) per marker, for all 3 coordinates.
 Eigen::MatrixXd marker_noise(const Eigen::Ref<const Eigen::VectorXd>& variance_mm2_per_marker);
 
-// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
-#if S2KF_DEFINE_HEAVY
-
-S2KF_INLINE Eigen::MatrixXd marker_noise(double variance_mm2, Eigen::Index marker_count) {
-  if (!(variance_mm2 >= 0) || !std::isfinite(variance_mm2) || marker_count < 0)
-    throw std::invalid_argument("marker_noise: the variance must be a finite number >= 0 (mm^2)");
-  return Eigen::VectorXd::Constant(3 * marker_count, variance_mm2).asDiagonal();
-}
-
-S2KF_INLINE Eigen::MatrixXd marker_noise(const Eigen::Ref<const Eigen::VectorXd>& variance_mm2_per_marker) {
-  if (!variance_mm2_per_marker.allFinite() || (variance_mm2_per_marker.array() < 0).any())
-    throw std::invalid_argument("marker_noise: every variance must be a finite number >= 0 (mm^2)");
-  Eigen::VectorXd diagonal(3 * variance_mm2_per_marker.size());
-  for (Eigen::Index m = 0; m < variance_mm2_per_marker.size(); ++m)
-    diagonal.segment<3>(3 * m).setConstant(variance_mm2_per_marker(m));
-  return diagonal.asDiagonal();
-}
-
-S2KF_INLINE Pose MarkerMeasurementModel::pose(const Eigen::Ref<const Eigen::VectorXd>& state) const {
-  check_state_size(state.size(), "pose");
-  const Eigen::Vector3d rpy = orientation_ == OrientationParameterization::roll_pitch_yaw
-                                  ? Eigen::Vector3d(state.segment<3>(3))
-                                  : rpy_from_rotation(root_rotation(state.segment<3>(3)));
-  return Pose{state.head<3>(), rpy, joints_.angles(state.tail(model_.joint_count()))};
-}
-
-S2KF_INLINE Eigen::VectorXd MarkerMeasurementModel::state(const Pose& pose) const {
-  detail::check_joint_count(model_, pose.joints.size(), "MarkerMeasurementModel::state");
-  Eigen::VectorXd x(state_dimension());
-  x.head<3>() = pose.root_position;
-  x.segment<3>(3) = orientation_ == OrientationParameterization::roll_pitch_yaw
-                        ? pose.root_rpy
-                        : rotation_log(reference_.transpose() * pose.root_rotation());
-  x.tail(model_.joint_count()) = joints_.parameters(pose.joints);
-  return x;
-}
-
-S2KF_INLINE void MarkerMeasurementModel::operator()(const Eigen::Ref<const Eigen::MatrixXd>& states,
-                                                    Eigen::Ref<Eigen::MatrixXd> predictions) {
-  const Eigen::Index count = states.cols();
-  check_state_size(states.rows(), "operator()");
-  if (predictions.rows() != measurement_dimension() || predictions.cols() != count)
-    throw DimensionError("MarkerMeasurementModel: predictions must be " +
-                         std::to_string(measurement_dimension()) + " x " + std::to_string(count) + ", got " +
-                         std::to_string(predictions.rows()) + " x " + std::to_string(predictions.cols()));
-  if (single_precision_)
-    evaluate(states, predictions, ws_single_, orientation_single_);
-  else
-    evaluate(states, predictions, ws_, orientation_buffer_);
-}
-
-#endif  // S2KF_DEFINE_HEAVY
-
 }  // namespace s2kf::body
+
+#if !defined(S2KF_COMPILED)
+#include <s2kf/body/marker_measurement_model.hxx>
+#endif

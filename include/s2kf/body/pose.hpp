@@ -109,20 +109,8 @@ inline std::vector<std::string> pose_column_names(const std::vector<std::string>
   return names;
 }
 
-// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
-#if S2KF_DEFINE_HEAVY
-
-S2KF_INLINE Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& v) {
-  const double angle = v.norm();
-  if (angle == 0) return Eigen::Matrix3d::Identity();
-  return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
-}
-
-S2KF_INLINE Eigen::Vector3d rotation_log(const Eigen::Matrix3d& r) {
-  const Eigen::AngleAxisd angle_axis(r);
-  return angle_axis.angle() * angle_axis.axis();
-}
-
-#endif  // S2KF_DEFINE_HEAVY
-
 }  // namespace s2kf::body
+
+#if !defined(S2KF_COMPILED)
+#include <s2kf/body/pose.hxx>
+#endif

@@ -70,24 +70,6 @@ struct HeightEstimate {
 std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
                                               const body::MarkerMapping& mapping, std::int64_t max_frames = 200);
 
-#if S2KF_DEFINE_HEAVY
-S2KF_INLINE std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
-                                                          const body::MarkerMapping& mapping,
-                                                          std::int64_t max_frames) {
-  HeightEstimator estimator(model, mapping);
-  const std::int64_t frames = source.frame_count();
-  const std::int64_t step = std::max<std::int64_t>(1, frames / max_frames);
-  MarkerFrame frame;
-  for (std::int64_t f = 0; f < frames; f += step) {
-    if (!source.read(f, frame)) break;
-    estimator.add_frame(frame.positions, frame.visible);
-  }
-  const std::optional<double> mm = estimator.height_mm();
-  if (!mm) return std::nullopt;
-  return HeightEstimate{*mm, estimator.pair_count()};
-}
-#endif
-
 /// Why the recording's coordinates cannot be a person's in millimetres, or "" when they can. The
 /// rigid marker pairs measure the body whatever the file's POINT:UNITS say: `geometric_mm` is the
 /// height they give (estimate_height), `height_mm` the height the run would use and `source` where
@@ -113,26 +95,8 @@ inline std::string units_problem(double geometric_mm, double height_mm, const st
   return s.str();
 }
 
-// The definitions: inline here by default, or compiled once (core/compilation_mode.hpp).
-#if S2KF_DEFINE_HEAVY
-
-S2KF_INLINE void HeightEstimator::add_frame(const Eigen::Matrix3Xd& points,
-                                            const Eigen::Array<bool, Eigen::Dynamic, 1>& visible) {
-  for (const Pair& pair : pairs_) {
-    const int pa = mapping_.point_of_marker[pair.a], pb = mapping_.point_of_marker[pair.b];
-    if (pa >= points.cols() || pb >= points.cols() || !visible(pa) || !visible(pb)) continue;
-    const double d = (points.col(pa) - points.col(pb)).norm();
-    if (std::isfinite(d) && d > 0) ratios_.push_back(d / pair.model_distance);
-  }
-}
-
-S2KF_INLINE std::optional<double> HeightEstimator::height_mm() const {
-  if (ratios_.empty()) return std::nullopt;
-  std::vector<double> sorted = ratios_;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  return height_ * sorted[sorted.size() / 2];
-}
-
-#endif  // S2KF_DEFINE_HEAVY
-
 }  // namespace s2kf::calibration
+
+#if !defined(S2KF_COMPILED)
+#include <s2kf/calibration/height_estimate.hxx>
+#endif

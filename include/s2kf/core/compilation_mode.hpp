@@ -1,28 +1,21 @@
 /// @file
 /// Header-only by default, or one compiled copy of the heavy functions, by the user's choice.
 ///
-/// The tracker, the subject calibration, the baseline, the smoother and the session each
-/// instantiate the filter's update and hundreds of Eigen kernels; a translation unit that merely
-/// includes them spends 20-40 s in the compiler, because C++ instantiates every template an inline
-/// body uses, called or not, and the many small functions around them (kinematics, charts, files)
-/// add up the same way. Every function that is not a template and does more than a line or two is
-/// therefore declared where it belongs and defined under `#if S2KF_DEFINE_HEAVY` at the end of its
-/// header:
+/// The tracker, the subject calibration, the session and the evaluation each instantiate the
+/// filter's update and hundreds of Eigen kernels; a translation unit that merely included their
+/// definitions would spend tens of seconds in the compiler. So every function that is not a
+/// template and does more than a line or two is declared in its header `name.hpp` and defined in
+/// `name.hxx` beside it (as Pinocchio keeps its algorithms):
 ///
-/// - default (header-only): the definitions are `inline` and every translation unit sees them;
-/// - `S2KF_COMPILED` (the CMake target `s2kf::compiled` sets it): translation units see the
-///   declarations only and link the one compiled copy in the `s2kf_compiled` library;
-/// - `S2KF_BUILDING_COMPILED`: the one source file of that library, which emits every definition
-///   once (non-inline).
+/// - header-only (the CMake target `s2kf::s2kf`): each header includes its `.hxx` at its end, and
+///   the definitions are `inline`;
+/// - compiled (`s2kf::compiled`, which defines `S2KF_COMPILED`): headers declare only, and the
+///   library `s2kf_compiled` compiles each concept's `.hxx` files once, in `src/<concept>.cpp`
+///   (one translation unit per concept folder, so they compile in parallel).
 #pragma once
 
-#if defined(S2KF_BUILDING_COMPILED)
-#define S2KF_DEFINE_HEAVY 1
+#if defined(S2KF_COMPILED)
 #define S2KF_INLINE
-#elif defined(S2KF_COMPILED)
-#define S2KF_DEFINE_HEAVY 0
-#define S2KF_INLINE inline
 #else
-#define S2KF_DEFINE_HEAVY 1
 #define S2KF_INLINE inline
 #endif

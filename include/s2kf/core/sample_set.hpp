@@ -33,24 +33,6 @@ struct SampleSet {
 /// Throws DimensionError when the samples do not span the space (C singular).
 void correct_moments(Eigen::MatrixXd& z);
 
-#if S2KF_DEFINE_HEAVY
-S2KF_INLINE void correct_moments(Eigen::MatrixXd& z) {
-  const double count = static_cast<double>(z.cols());
-  z.colwise() -= z.rowwise().mean();
-  const Eigen::MatrixXd c = (z * z.transpose()) / count;
-  // chol(C^-1) = L^-T up to an orthogonal factor; use the exact definition for clarity of the proof
-  // in the spec: A A^T = C^-1, then (A^T Z)(A^T Z)^T / L = A^T C A = I.
-  Eigen::LLT<Eigen::MatrixXd> llt_c(c);
-  if (llt_c.info() != Eigen::Success) throw DimensionError("correct_moments: samples do not span the space");
-  const Eigen::MatrixXd c_inv = llt_c.solve(Eigen::MatrixXd::Identity(c.rows(), c.cols()));
-  Eigen::LLT<Eigen::MatrixXd> llt_inv(c_inv);
-  if (llt_inv.info() != Eigen::Success)
-    throw DimensionError("correct_moments: samples do not span the space");
-  const Eigen::MatrixXd a = llt_inv.matrixL();
-  z = (a.transpose() * z).eval();
-}
-#endif
-
 /// The unscented set: the origin and +-sqrt(N + kappa) e_k. With kappa = 0.5 (the default) all
 /// 2N + 1 weights are equal, 1 / (2N + 1), which is the "UKF-sized" set of the tracking comparison.
 inline SampleSet ukf_sample_set(int dimension, double kappa = 0.5) {
@@ -98,3 +80,7 @@ inline SampleSet equally_weighted(Eigen::MatrixXd points, std::string kind) {
 }
 
 }  // namespace s2kf
+
+#if !defined(S2KF_COMPILED)
+#include <s2kf/core/sample_set.hxx>
+#endif

@@ -19,14 +19,8 @@ struct RigidTransform {
 /// one line for a unique answer).
 RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to);
 
-#if S2KF_DEFINE_HEAVY
-S2KF_INLINE RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to) {
-  const Eigen::Matrix4d fit = Eigen::umeyama(from, to, false);
-  RigidTransform transform;
-  transform.rotation = fit.topLeftCorner<3, 3>();
-  transform.translation = fit.topRightCorner<3, 1>();
-  return transform;
-}
-#endif
-
 }  // namespace s2kf::geometry
+
+#if !defined(S2KF_COMPILED)
+#include <s2kf/geometry/rigid_fit.hxx>
+#endif

@@ -96,7 +96,7 @@ json hidden_time_json(const evaluation::HiddenTimeError& e) {
 }
 
 json result_json(const evaluation::MethodResult& r) {
-  json j = {{"method", track::to_string(r.method)},
+  json j = {{"method", pipeline::to_string(r.method)},
             {"samples", r.samples ? json(r.samples) : json(nullptr)},
             {"converged_frame", r.converged_frame},
             {"mean_marker_distance_mm", number_or_null(r.level_mm)},

@@ -1,0 +1,3 @@
+// The compiled copy of the definitions in s2kf/calibration/ (core/compilation_mode.hpp).
+#include <s2kf/calibration/height_estimate.hxx>
+#include <s2kf/calibration/subject_calibration.hxx>
