@@ -11,7 +11,7 @@
 ///   the definitions are `inline`;
 /// - compiled (`s2kf::compiled`, which defines `S2KF_COMPILED`): headers declare only, and the
 ///   library `s2kf_compiled` compiles each concept's `.hxx` files once, in `src/<concept>.cpp`
-///   (one translation unit per concept folder, so they compile in parallel).
+///   (one translation unit per concept folder, the core's in two, so they compile in parallel).
 #pragma once
 
 #if defined(S2KF_COMPILED)
