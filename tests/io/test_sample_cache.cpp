@@ -21,7 +21,7 @@ using s2kf::LcdOptions;
 using s2kf::SampleCache;
 
 // A fresh directory per test, so tests never see each other's files.
-fs::path scratch(const std::string& name) {
+fs::path cache_scratch(const std::string& name) {
   const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "sample_cache" / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -39,7 +39,7 @@ void write_bytes(const fs::path& path, const std::vector<char>& bytes) {
 }
 
 TEST(SampleCache, RoundTripIsBitIdentical) {
-  const SampleCache cache(scratch("round_trip"));
+  const SampleCache cache(cache_scratch("round_trip"));
   const auto computed = s2kf::lcd_sample_set(3, 15, {}, cache);
   EXPECT_FALSE(computed.cached);
   EXPECT_GT(computed.seconds, 0.0);
@@ -63,7 +63,7 @@ TEST(SampleCache, RoundTripIsBitIdentical) {
 }
 
 TEST(SampleCache, KeyCoversEveryArgumentThatChangesTheSet) {
-  const SampleCache cache(scratch("keys"));
+  const SampleCache cache(cache_scratch("keys"));
   LcdOptions options;
   const fs::path base = cache.file_for(3, 15, options);
   EXPECT_NE(base, cache.file_for(3, 17, options));
@@ -90,7 +90,7 @@ TEST(SampleCache, KeyCoversEveryArgumentThatChangesTheSet) {
 // Damages the cache file with `damage`, then checks that the next call recomputes (the same set,
 // since the computation is deterministic), rewrites a valid file, and the call after loads it.
 void expect_recomputed_after(const std::string& name, const std::function<void(const fs::path&)>& damage) {
-  const SampleCache cache(scratch(name));
+  const SampleCache cache(cache_scratch(name));
   const auto original = s2kf::lcd_sample_set(2, 9, {}, cache);
   const fs::path file = cache.file_for(2, 9, {});
   const std::vector<char> good = read_bytes(file);
@@ -147,7 +147,7 @@ TEST(SampleCache, DisabledOrUnwritableCacheStillComputes) {
   EXPECT_FALSE(SampleCache::disabled().enabled());
   EXPECT_TRUE(SampleCache::disabled().file_for(2, 9, {}).empty());
   // A cache "directory" below a regular file can never be created.
-  const fs::path dir = scratch("unwritable");
+  const fs::path dir = cache_scratch("unwritable");
   std::ofstream(dir / "a_file") << "x";
   const SampleCache impossible(dir / "a_file" / "cache");
   const auto computed = s2kf::lcd_sample_set(2, 9, {}, impossible);
@@ -157,7 +157,7 @@ TEST(SampleCache, DisabledOrUnwritableCacheStillComputes) {
 }
 
 TEST(SampleCache, BadArgumentsFailWithOrWithoutACache) {
-  const SampleCache cache(scratch("bad"));
+  const SampleCache cache(cache_scratch("bad"));
   EXPECT_THROW(s2kf::lcd_sample_set(3, 5, {}, cache), s2kf::DimensionError);
   EXPECT_THROW(s2kf::lcd_sample_set(0, 5, {}, cache), s2kf::DimensionError);
   EXPECT_TRUE(fs::is_empty(cache.directory()));
@@ -166,7 +166,7 @@ TEST(SampleCache, BadArgumentsFailWithOrWithoutACache) {
 TEST(SampleCache, DefaultDirectoryFollowsTheEnvironment) {
   const char* saved = std::getenv("S2KF_CACHE_DIR");
   const std::string saved_value = saved ? saved : "";
-  const fs::path dir = scratch("environment");
+  const fs::path dir = cache_scratch("environment");
   setenv("S2KF_CACHE_DIR", dir.c_str(), 1);
   EXPECT_EQ(SampleCache::default_cache().directory(), dir);
   unsetenv("S2KF_CACHE_DIR");
@@ -181,7 +181,7 @@ TEST(SampleCache, DefaultDirectoryFollowsTheEnvironment) {
 }
 
 TEST(SampleCache, ConcurrentWritersLeaveOneValidFile) {
-  const SampleCache cache(scratch("concurrent"));
+  const SampleCache cache(cache_scratch("concurrent"));
   const auto reference = s2kf::compute_lcd_sample_set(3, 13);
   std::vector<std::thread> writers;
   for (int t = 0; t < 4; ++t)
