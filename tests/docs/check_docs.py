@@ -4,7 +4,7 @@
 links:   every relative link points to a file or folder that exists and, with #anchor, to a
          heading of that page (GitHub's anchors: lower case, punctuation dropped, spaces to -).
 length:  no page is longer than 500 lines.
-dates:   no page dates a fact by a "session" ("the ninth session", "this session", ...).
+dates:   no page dates a fact by a "session" (an ordinal, "this", "that" and the like before it).
 --self-test runs each check on a scratch tree with one fault of its kind and fails unless the
 check finds it.
 
