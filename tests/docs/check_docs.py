@@ -5,10 +5,12 @@ links:   every relative link points to a file or folder that exists and, with #a
          heading of that page (GitHub's anchors: lower case, punctuation dropped, spaces to -).
 length:  no page is longer than 500 lines.
 dates:   no page dates a fact by a "session" (an ordinal, "this", "that" and the like before it).
+paths:   every repository path a page names in backticks (`include/...`, `tests/...`, ...) exists;
+         the dated notes under docs/notes/ are left out, as they name the files of their day.
 --self-test runs each check on a scratch tree with one fault of its kind and fails unless the
 check finds it.
 
-Usage: check_docs.py ROOT [links] [length] [dates] | check_docs.py --self-test
+Usage: check_docs.py ROOT [links] [length] [dates] [paths] | check_docs.py --self-test
 """
 import os
 import re
@@ -113,7 +115,24 @@ def check_dates(root):
     return problems
 
 
-CHECKS = {"links": check_links, "length": check_length, "dates": check_dates}
+PATH = re.compile(r"`((?:include|src|scripts|tests|data|docs|examples|apps|python|benchmarks|cmake)/"
+                  r"[^`\s*{}<>]+)`")
+
+
+def check_paths(root):
+    problems = []
+    for page in pages(root):
+        if os.sep + "notes" + os.sep in page:
+            continue
+        for number, line in prose_lines(page):
+            for path in PATH.findall(line):
+                path = path.rstrip(".,;:)")
+                if not os.path.exists(os.path.join(root, path)):
+                    problems.append(f"{os.path.relpath(page, root)}:{number}: '{path}' does not exist")
+    return problems
+
+
+CHECKS = {"links": check_links, "length": check_length, "dates": check_dates, "paths": check_paths}
 
 
 def self_test():
@@ -121,10 +140,12 @@ def self_test():
         "links": {"README.md": "[a](docs/a.md#there)\n", "docs/a.md": "# Here\n"},
         "length": {"docs/a.md": "line\n" * (MAX_LINES + 1)},
         "dates": {"docs/a.md": "Measured in the ninth\nsession.\n"},
+        "paths": {"docs/a.md": "See `include/s2kf/gone.hpp`.\n"},
     }
     clean = {"README.md": "[a](docs/a.md#here-and-there) [b](docs/b.md) ![c](docs/)\n",
              "docs/a.md": "# Here and there\n```cpp\n#include <x>\n[x](missing.md)\n```\n",
-             "docs/b.md": "[back](../README.md) [self](#b)\n# B\n"}
+             "docs/b.md": "[back](../README.md) [self](#b) `docs/a.md`\n# B\n",
+             "docs/notes/n.md": "Then in `include/s2kf/gone.hpp`.\n"}
     failures = []
     for name, check in CHECKS.items():
         for files, expect in ((faults[name], True), (clean, False)):
@@ -145,12 +166,12 @@ def main(argv):
     if argv[1:] == ["--self-test"]:
         return self_test()
     if len(argv) < 2 or not os.path.isdir(argv[1]):
-        print("usage: check_docs.py ROOT [links] [length] [dates] | check_docs.py --self-test")
+        print("usage: check_docs.py ROOT [links] [length] [dates] [paths] | check_docs.py --self-test")
         return 2
     names = argv[2:] or list(CHECKS)
     unknown = [n for n in names if n not in CHECKS]
     if unknown:
-        print(f"unknown check '{unknown[0]}' (use links, length or dates)")
+        print(f"unknown check '{unknown[0]}' (use links, length, dates or paths)")
         return 2
     problems = [p for n in names for p in CHECKS[n](argv[1])]
     for problem in problems:
