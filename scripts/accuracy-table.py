@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The accuracy table of docs/tracking.md: `s2kf evaluate --motion` on simulated realistic subjects
+"""The accuracy table of docs/accuracy.md: `s2kf evaluate --motion` on simulated realistic subjects
 (several motions and subject seeds, with and without the paper's occlusion), the S2KF's default
 beside the true-subject reference. Prints a Markdown table and the means over the runs.
 

@@ -1,4 +1,4 @@
-// The tuning driver behind the motion-model and calibration-prior choices in docs/tracking.md: one
+// The tuning driver behind the motion-model and calibration-prior choices in docs/tracking.md and docs/notes/: one
 // simulated realistic subject and motion, tracked as `s2kf track` tracks it (marker set chosen from
 // the labels, calibration unless 0), with the tracker's motion model and noise levels given on the
 // command line; prints the accuracy against the truth after 20 frames (and the true-subject

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The convergence frame of `s2kf track` results under the earlier and the current rule, from
 their per-frame marker distances (PREFIX_markers.csv) and rates (PREFIX.json), computed here
-independently of the program (docs/tracking.md, "Frames to converge").
+independently of the program (docs/notes/2026-11-23-first-accuracy-tables.md).
 
     scripts/convergence-rules.py PREFIX [PREFIX ...]
 

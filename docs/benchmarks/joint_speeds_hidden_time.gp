@@ -1,6 +1,6 @@
 # Segment-orientation error against the time the segment's markers have been hidden, pooled over
 # the 12 occluded simulated cases: every joint's random walk at 8 per second (main at 1364e78)
-# against the flexions at 8 and every other joint at 4 (the default since the ninth session).
+# against the flexions at 8 and every other joint at 4 (the default since 2026-11-27, 4d8705a).
 # Data: scripts/hidden-time-figure.py on docs/benchmarks/accuracy/marker_dependencies_default.json
 # and joint_speeds_default.json. Run from the repository root.
 set terminal pngcairo size 900,560

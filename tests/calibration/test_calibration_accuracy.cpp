@@ -107,7 +107,7 @@ INSTANTIATE_TEST_SUITE_P(CalibrationAccuracy, CalibrationMet,
 
 class BundledRecording : public ::testing::TestWithParam<const char*> {};
 
-// Not met yet on every recording (docs/tracking.md, "Gauge-aware subject calibration"): run with
+// Not met yet on every recording (docs/calibration.md, the gauges): run with
 // --gtest_also_run_disabled_tests. Since joints are kept off their limits' turning point the walk
 // and both handstands pass (walk 6.04 / 5.88 deg segments, handstand 10.33 / 9.43, occluded
 // handstand 14.71 / 11.66, no calibration / calibrated); the cartwheel does not (10.51 / 11.33).

@@ -75,7 +75,7 @@ TEST(IdentifiableSubjectReference, ResetsTheGaugeToTheNominalAndKeepsTheRest) {
   const body::BodyModel nominal = nominal_of(truth, turn);
   const evaluation::IdentifiableSubject identifiable = evaluation::identifiable_subject(
       nominal, c.subject, c.recording, c.frames, calibration::CalibrationOptions{}, kNoiseMm, kExactGauges);
-  // The model's gauges (docs/tracking.md): 3 per ankle, 3 for the neck, 1 per wrist, with a gap
+  // The model's gauges (docs/calibration.md): 3 per ankle, 3 for the neck, 1 per wrist, with a gap
   // above them.
   EXPECT_LT(identifiable.information_ratios(10), 0.2 * identifiable.threshold);
   EXPECT_GT(identifiable.information_ratios(11), 2 * identifiable.threshold);

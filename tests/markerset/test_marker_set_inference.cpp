@@ -187,7 +187,7 @@ void expect_inferred_like_named(const std::string& name, Eigen::Index first) {
   EXPECT_LE(with_inferred.joint_rms_deg, 1.3 * with_names.joint_rms_deg) << name;
   // Segment orientations within 1.4 times, not 1.3: with every marker on its true segment, only
   // the offsets differ (the template frame's, not the model's), and the calibration carries that
-  // difference into the weakly identified axial angles (docs/tracking.md, the gauge analysis).
+  // difference into the weakly identified axial angles (docs/calibration.md, the gauges).
   EXPECT_LE(with_inferred.segment_rms_deg, 1.4 * with_names.segment_rms_deg) << name;
 }
 

@@ -71,7 +71,7 @@ struct Walk {
   }
 };
 
-// The figures of the fault table in docs/tracking.md.
+// The figures of the fault table in docs/faults.md.
 void report(const char* fault, const Outcome& clean, const Outcome& guarded, const Outcome& open) {
   std::printf(
       "[fault] %s: segment RMS %.2f / %.2f / %.2f deg, limb flexion %.2f / %.2f / %.2f deg "

@@ -187,7 +187,7 @@ TEST(Tracker, AJointThatLeavesItsLimitIsFollowed) {
   EXPECT_GT(upper_arm_error(stuck), 6.0);  // measured 7.8
   // Over all segments too. Limb flexion is not always better on this uncalibrated walk (knees and
   // elbows that rest at their limits are held 0.5 % of their half range inside); over 24
-  // calibrated simulated cases it is (docs/tracking.md).
+  // calibrated simulated cases it is (docs/notes/2026-11-25-joints-at-limits.md).
   EXPECT_LT(kept.truth.segment_orientation_rms_deg, stuck.truth.segment_orientation_rms_deg);
 }
 
@@ -380,7 +380,7 @@ TEST(Tracker, TheSlowerWalkOfTheOtherJointsHoldsPartlyHiddenSegments) {
   EXPECT_LT(forearms_and_hands(by_kind), 0.9 * forearms_and_hands(one_speed));
   EXPECT_LT(by_kind.truth.segment_orientation_rms_deg, one_speed.truth.segment_orientation_rms_deg);
   // Limb flexion is not asserted: on this one walk it is worse (2.7 against 2.3 degrees), on 22 of
-  // the 24 simulated cases of docs/tracking.md better.
+  // the 24 simulated cases of docs/accuracy.md better.
 }
 
 TEST(Tracker, RejectsOptionsAndMappingsThatCannotWork) {

@@ -135,13 +135,8 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const b
     std::vector<BundleFrame> frames;
   };
   std::vector<Stretch> stretches(bounds.size() - 1);
-  // The pass takes the ordinary gain whatever the tracker's. Its poses start the bundle adjustment
-  // and decide which residuals it leaves out, and the calibration is sensitive to them: with the
-  // information form here the real test1 recording's subject came out tracking 7.2 mm instead of
-  // 4.6 (docs/benchmarks.md). For the same reason every joint walks as loosely as the flexions, so
-  // the poses follow the markers closely: with the tracker's slower walk for the other joints the
-  // real test1 and HDM05 recordings' subjects came out tracking 6.0 and 14.4 mm instead of 4.4 and
-  // 10.9 (docs/tracking.md).
+  // The pass's poses start the bundle adjustment and choose its outliers, so they must follow the
+  // markers closely: the exact gain and every joint as loose as the flexions (docs/calibration.md).
   track::TrackerOptions pass_options = tracker_options;
   pass_options.information_form_update = false;
   pass_options.joint_speed_per_s = std::max(pass_options.joint_speed_per_s, pass_options.flexion_speed_per_s);

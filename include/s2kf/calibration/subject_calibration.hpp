@@ -39,14 +39,11 @@ namespace s2kf::calibration {
 
 struct CalibrationOptions {
   /// Rounds of (track the recording with the current model, then bundle-adjust poses and subject).
-  /// One is enough: the bundle adjustment converges from the tracked poses, and a second round
-  /// (re-tracking with the calibrated model, tighter outlier selection) made two real recordings'
-  /// distances 0.2 and 1.1 mm worse (docs/real-data.md).
+  /// One: the bundle adjustment converges from the tracked poses, and a second round did not help.
   int iterations = 1;
   /// Levenberg-Marquardt iterations per bundle adjustment at most; it stops earlier when an
-  /// accepted step lowers the cost by less than `relative_tolerance` of it. 1e-4 instead of 1e-5
-  /// left the marker distances of the real recordings and the joint-angle errors of the simulated
-  /// ones within 1 % (docs/benchmarks.md) and saves the slow tail of the iterations.
+  /// accepted step lowers the cost by less than `relative_tolerance` of it (1e-4: the same results
+  /// within 1 % as 1e-5, without the slow tail of the iterations).
   int bundle_iterations = 40;
   double relative_tolerance = 1e-4;
   /// Threads the calibration may use: the stretches of its tracking pass are tracked side by side
@@ -72,16 +69,14 @@ struct CalibrationOptions {
   /// the gauge directions (all markers of an end segment turned about its joint's axes, which a
   /// constant joint-angle offset undoes; a bone length against the markers beyond it) and the
   /// directions close to them, which soft tissue would otherwise decide. 0 (default): every
-  /// direction is estimated, the priors weighing in as usual. 0.3 made the segments of simulated
-  /// subjects better on some motions and worse on others (docs/tracking.md, "Gauge-aware subject
-  /// calibration"), so it is not the default.
+  /// direction is estimated, the priors weighing in as usual; a hard cut helped some motions and
+  /// hurt others, so weak_direction_shrink, its soft form, is the default instead.
   double prior_only_fraction = 0;
   /// With prior_only_share, prior_only_fraction thresholds instead the share of a direction's
   /// information (the data's with the poses known, plus the prior's) that survives the poses'
   /// elimination: the generalised eigenproblem S v = mu (C + P) v. A gauge keeps none of it; a
   /// direction the poses do not trade with keeps nearly all, however often its markers are hidden.
-  /// 0.1 made the segments of simulated subjects better and their flexion and root orientation
-  /// worse (docs/tracking.md, "The identifiable-subject reference"), so it is not the default.
+  /// Off by default: it traded better segments for worse limb flexion and root orientation.
   bool prior_only_share = false;
   /// Shrinkage of the marker offsets towards the marker set in proportion to how weakly the data
   /// see a direction: an extra prior c (x - x0)^T (C + P) (x - x0) on the offsets' deviation x - x0
@@ -90,9 +85,8 @@ struct CalibrationOptions {
   /// S v = mu (C + P) v (S the information with the poses eliminated) it keeps the fraction
   /// mu / (mu + c) of the data's step: a gauge (mu = 0) stays at the marker set, a direction the
   /// poses do not trade with (mu near 1) moves by 1 / (1 + c) of it. The length factors are left
-  /// free of it (shrinking them too made root orientation worse). 0.03 made the segments, limb
-  /// flexion and root orientation of 12 simulated realistic cases better on the means than none,
-  /// with and without occlusion (docs/tracking.md, "Shrinking the weakly seen directions").
+  /// free of it (shrinking them too cost root orientation). 0.03: soft tissue, not the subject,
+  /// would otherwise decide the weakly seen directions (docs/calibration.md).
   double weak_direction_shrink = 0.03;
   /// > 0: the recording is a static trial in the model's zero pose (standing upright, every joint
   /// angle 0): each adjusted frame's joint angles get a Gaussian prior at 0 with this SD (rad).

@@ -8,8 +8,8 @@
 /// information matrix (the prior's factor S and the information vector as the border). Eigen's
 /// LLT followed by a triangular solve does the same arithmetic, but at these sizes (20-200 rows)
 /// both run far below the machine's multiply-add rate; this left-looking factorisation computes
-/// four columns at a time over row tiles that stay in registers and is 1.9-2.5 times faster than
-/// the two calls together (measured in docs/benchmarks.md).
+/// four columns at a time over row tiles that stay in registers, about twice as fast as the two
+/// calls together.
 #pragma once
 
 #include <Eigen/Core>

@@ -7,8 +7,8 @@
 /// much of their time packing their operands and run at about half the machine's multiply-add rate;
 /// here a tile of C (32 rows by 12 columns with AVX-512: 24 vector registers) stays in registers
 /// while every sample passes once, reading A's column and B's row of the tile straight from their
-/// matrices, so nothing is packed and nothing is allocated. Measured in docs/benchmarks.md: the
-/// lower half of a 150 x 150 moment over 301 samples in about 45 instead of 65 microseconds.
+/// matrices, so nothing is packed and nothing is allocated: about 1.5 times Eigen's product at the
+/// tracker's sizes (docs/benchmarks.md).
 #pragma once
 
 #include <Eigen/Core>

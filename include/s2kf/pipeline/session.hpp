@@ -72,16 +72,14 @@ struct SessionOptions {
   }();
   /// The sample set of the calibration's tracking pass; empty (no points): the tracker's own. That
   /// pass gives the bundle adjustment its starting poses and decides which residuals it leaves out
-  /// as outliers, so a smaller set is faster but can land the calibration elsewhere: 93 samples
-  /// instead of 301 made it better on simulated subjects and up to 30 % worse in marker distance on
-  /// real recordings (docs/benchmarks.md), hence the tracker's set by default.
+  /// as outliers, so a smaller set is faster but can land the calibration elsewhere; the tracker's
+  /// set by default, which fits real recordings closest (docs/calibration.md).
   SampleSet calibration_samples;
   /// After calibrating, each marker the set gives no noise of its own gets the tracker's
   /// marker_noise_mm times its calibration residual over the median marker's (clamped to 0.5-2
   /// times; marker_noise_from_residuals): a marker whose soft tissue the constant subject cannot
-  /// explain then counts less. On 48 simulated realistic cases it lowered root orientation RMS by
-  /// 0.1-0.2 degrees and limb flexion by up to 0.07, left the segments within 0.06 degrees, and
-  /// test1's marker distance fell by 7 % (docs/tracking.md). Without calibration it does nothing.
+  /// explain then counts less and pulls the pose less (docs/calibration.md). Without calibration it
+  /// does nothing.
   bool noise_from_calibration = true;
   /// A calibration that cannot be done (too few usable frames) leaves the marker set as it is with
   /// a warning (true), or is an error (false: `s2kf calibrate`).

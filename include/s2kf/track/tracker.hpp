@@ -132,8 +132,8 @@ class Tracker {
   /// their own. The nonlinear parts of the predictions are correlated within a part: every marker
   /// of the upper body moves with the spine's joints, every marker of a leg with its hip. Across
   /// parts only the root's pose is shared, which the filter's local rotation error keeps nearly
-  /// linear. Finer parts (each arm, the head and the spine apart) left out the spine's share of
-  /// the arms' markers and tracked a real recording 25 % worse (docs/benchmarks.md).
+  /// linear. Finer parts (each arm apart from the spine) would leave out the spine's share of the
+  /// arms' markers.
   static int body_part_of_frame(const body::BodyModel& model, int frame) {
     while (frame > 0 && model.joints[static_cast<std::size_t>(frame - 1)].parent_frame != 0)
       frame = model.joints[static_cast<std::size_t>(frame - 1)].parent_frame;

@@ -36,8 +36,7 @@ struct TrackerOptions {
   /// Constant velocity: spectral density sqrt(q) of the white-noise acceleration of the root
   /// position (mm s^-1.5), orientation (rad s^-1.5) and Theta (s^-1.5); over one frame of dt the
   /// velocity's SD grows by sqrt(q dt), and Q = q [dt^3/3, dt^2/2; dt^2/2, dt] per component.
-  /// The defaults are the best of the levels tried on the simulated motions (docs/tracking.md);
-  /// larger ones (300 mm, 3, 3 and above) let the rates chase soft tissue and diverge.
+  /// The defaults are the best levels tried; larger ones let the rates chase soft tissue.
   double position_acceleration = 100.0;
   double orientation_acceleration = 1.0;
   double joint_acceleration = 1.0;
@@ -56,12 +55,8 @@ struct TrackerOptions {
   double orientation_speed_rad_per_s = 6.0;  ///< random-walk SD of the root orientation per second
   /// Random-walk SD per second of the joint parameters Theta: of the limbs' flexion/extension
   /// (body::is_limb_flexion: shoulders, elbows, hips, knees and ankles about x), and of every other
-  /// joint (the twists, ab/adduction, the spine, neck and wrists). Those others move slower in
-  /// whole-body motion and the markers see them less well, so a looser walk only lets soft tissue
-  /// and a lone visible marker turn them. On simulated realistic subjects (five motions, among them
-  /// a dance whose twists move; six seeds) 4 instead of 8 lowered the segment RMS with the paper's
-  /// occlusion (11.30 -> 10.09 degrees over 12 cases, 10.51 -> 9.52 over 15 others) and left no
-  /// segment or flexion mean worse without it (docs/tracking.md).
+  /// joint (the twists, ab/adduction, the spine, neck and wrists). The others move slower and a
+  /// lone visible marker's soft tissue would turn them under a looser walk (docs/tracking.md).
   double flexion_speed_per_s = 8.0;
   double joint_speed_per_s = 4.0;
 
@@ -85,19 +80,13 @@ struct TrackerOptions {
   /// within each body part (the pelvis, the upper body, each leg: Tracker's information groups).
   /// It leaves out only the correlation between body parts of the predictions' nonlinear parts
   /// (the first, iterated frames and the calibration's tracking pass always use the ordinary
-  /// update). On by default, by measurement (docs/benchmarks.md): the step at L = 301 takes about
-  /// 0.83 of the ordinary update's time; the 24 simulated cases' accuracy means are equal or
-  /// better without occlusion and within 0.35 % with it; on the real recordings the marker
-  /// distance is within 0.3 % except test1 (+3.9 %) and the handstand (-1.8 %). With a group per
-  /// marker HDM05 rose from 11.0 to 15.3 mm; with a group per limb, test1 from 4.6 to 5.8 mm.
+  /// update). On by default: faster than the exact gain and as accurate (docs/tracking.md, "The gain").
   bool information_form_update = true;
   /// UpdateOptions::information_form_max_nonlinearity: a frame in which two body parts' predicted
   /// spreads that the linearisation does not explain exceed this multiple of their noise variance
   /// (their geometric mean; a wide prior over a curved model: a segment hidden for a while, a fast
-  /// motion) is updated the ordinary way. In steady tracking the parts with hands carry 1.1-1.8.
-  /// Measured with a group per limb, of 1, 1.5, 2, 3, 5 and no limit, 2 to 5 kept every accuracy
-  /// mean of 24 simulated cases within 1 % of the ordinary update's and no limit did not, while 1
-  /// sent most of the handstand's frames to the ordinary update as well (docs/benchmarks.md).
+  /// motion) is updated the ordinary way. 2 sits above steady tracking (1.1-1.8 for the parts with
+  /// hands) and keeps the accuracy within 1 % of the ordinary update's.
   double information_form_max_nonlinearity = 2.0;
   /// The information form regresses the predictions on the products of the root's orientation
   /// error as well (UpdateOptions::information_quadratic_states): the second order of the
@@ -108,23 +97,19 @@ struct TrackerOptions {
   /// root's pose and the joints between the root and the marker's segment). A joint that no
   /// visible marker depends on (a hand whose markers are all hidden) is then moved only through
   /// its prior correlation with the joints the markers see, not by the sample set's spurious
-  /// cross-covariance, which moved such a hand steadily, tens of degrees over half a second of a
-  /// walk (docs/tracking.md).
+  /// cross-covariance, which would drift it steadily.
   bool marker_dependencies = true;
 
   /// After every update each joint's Theta is kept learnable (keep_joint_parameters_learnable):
   /// its mean at least this far (rad) inside +-pi/2, where the sine's slope vanishes and a joint
   /// that reached its limit would stay there whatever the markers show; and its SD at most
-  /// joint_parameter_max_sd. 0 disables either bound.
-  /// 0.1 rad keeps a joint within half (1 - cos 0.1) = 0.5 % of its half range of the limit, and
-  /// brought a shoulder that the walk had left at its limit back (docs/tracking.md).
+  /// joint_parameter_max_sd. 0 disables either bound. 0.1 rad keeps a joint within 0.5 % of its
+  /// half range of the limit, with a tenth of the sine's slope left to come back by.
   double joint_parameter_margin = 0.1;
   double joint_parameter_max_sd = 0.5;
   /// Forward kinematics of the samples in single precision
-  /// (MarkerMeasurementModel::set_single_precision): another 10 % of the step, but off by default:
-  /// float rounds lab coordinates to about 1e-4 mm, which is not small against the spread of the
-  /// samples along well-determined directions, and it moved the calibrated handstand's accuracy
-  /// figures by more than 1 % (docs/benchmarks.md).
+  /// (MarkerMeasurementModel::set_single_precision): off, because float rounds lab coordinates
+  /// to about 1e-4 mm, not small against the samples' spread along well-determined directions.
   bool single_precision_kinematics = false;
 
   /// Per-marker gate: a marker whose innovation is beyond this chi-square quantile (3 degrees of
@@ -205,7 +190,7 @@ inline std::string gain_name(const TrackerOptions& options) {
 /// The seed paper's numbers (its section 5), read with R in m^2 (1e-4 m^2 = (10 mm)^2),
 /// Q_r = 25 mm^2 per frame, and 1e-10 for orientation and joints per frame; initial orientation 0
 /// with variance 1e-6, joints at mid-range with variance 1e-10, root from the marker mean. They are
-/// kept for comparison: with them the joints can barely move (docs/tracking.md shows the result).
+/// kept for comparison: with them the joints can barely move.
 TrackerOptions paper_preset(double rate_hz);
 
 TrackerOptions preset_options(const std::string& name, double rate_hz);
