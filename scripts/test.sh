@@ -28,15 +28,18 @@ if [ "${1:-}" = "--sanitize" ]; then
          -DS2KF_BUILD_BENCHMARKS=OFF "${unity[@]}")
 fi
 # Beyond the build packages, the tests use: pybind11 and numpy/pytest (the Python module), xmllint
-# (the OpenSim model's well-formedness), blender (the BVH import test) and chromium (the viewer test).
-scripts/install-deps.sh pybind11-dev python3-dev python3-numpy python3-pytest libxml2-utils blender chromium
+# (the OpenSim model's well-formedness), blender (the BVH import test), chromium (the viewer test)
+# and python3-venv for the test environment of PyPI packages (OpenSim, biorbd: tests/tools).
+scripts/install-deps.sh pybind11-dev python3-dev python3-numpy python3-pytest libxml2-utils blender chromium \
+  python3-venv
+test_python=$(realpath "$(scripts/python-env.sh)")
 jobs=$(nproc 2>/dev/null || echo 2)
 # Ninja lets every target's files compile while the libraries they link are still being built
 # (Make waits for them, and one core idles during the compiled library's two minutes). A build
 # directory made earlier keeps the generator it was made with.
 generator=()
 [ -f "$build/CMakeCache.txt" ] || generator=(-G Ninja)
-cmake -S . -B "$build" "${generator[@]}" "${flags[@]}" >/dev/null
+cmake -S . -B "$build" "${generator[@]}" "${flags[@]}" -DS2KF_TEST_PYTHON="$test_python" >/dev/null
 cmake --build "$build" -j "$jobs"
 cd "$build"
 S2KF_FUZZ_SECONDS=$fuzz_seconds ctest --output-on-failure -j "$jobs" "${skip[@]}"
