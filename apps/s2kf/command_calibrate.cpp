@@ -27,6 +27,7 @@ struct CalibrateSettings : SubjectSettings {
   std::string input;
   std::string out;
   bool quiet = false;
+  double body_mass_kg = 0;  ///< --mass, for SUBJECT.osim
 };
 
 void run_calibrate(CalibrateSettings settings) {
@@ -49,8 +50,8 @@ void run_calibrate(CalibrateSettings settings) {
                       {"bundle_rms_before_mm", pass.rms_before_mm},
                       {"bundle_rms_after_mm", pass.rms_after_mm}});
   if (fs::path(settings.out).has_parent_path()) fs::create_directories(fs::path(settings.out).parent_path());
-  const auto osim =
-      prepare_subject_opensim_model(settings.out, calibration.model, session.mapping);  // SUBJECT.osim
+  const auto osim = prepare_subject_opensim_model(settings.out, calibration.model, session.mapping,
+                                                  settings.body_mass_kg);  // SUBJECT.osim
   write_subject_file(settings.out, document);
   osim->commit();
   fs::path report = settings.out;
@@ -121,6 +122,7 @@ const RegisterCommand calibrate_registration{
       app.add_flag("!--uniform-noise", settings->noise_from_calibration,
                    "write no per-marker noise into the subject file (default: each marker's noise_mm "
                    "follows its calibration residual, 0.5-2 times the tracker's common 10 mm)");
+      add_mass_option(app, settings->body_mass_kg);
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");
       app.callback([settings] { run_calibrate(*settings); });
     }};

@@ -1,8 +1,10 @@
 // s2kf model: the body model's marker positions (zero pose or a given pose) or its joint table, as CSV.
 #include "command.hpp"
+#include "marker_set_json.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/body/pose_columns.hpp>
 
@@ -46,17 +48,24 @@ double parse_number(const std::string& text, const std::string& file, const std:
   }
 }
 
-// The tracker's pose CSV: header of pose_column_names(); the first data row is used. Extra columns
-// are ignored (diagnostics may follow), but every pose column must be there.
-s2kf::body::Pose read_pose_csv(const std::string& file, const s2kf::body::BodyModel& model) {
+// The tracker's pose CSV: header of pose_column_names(); data row `row` (0-based, blank lines not
+// counted) is used. Extra columns are ignored (diagnostics may follow), but every pose column must be there.
+s2kf::body::Pose read_pose_csv(const std::string& file, const s2kf::body::BodyModel& model, long row_index) {
   std::ifstream in(file);
   if (!in) throw UserError("cannot open the pose file " + file);
   std::string header_line, row_line;
   if (!std::getline(in, header_line)) throw UserError(file + " is empty; expected a pose CSV with a header");
-  while (std::getline(in, row_line) && row_line.find_first_not_of(" \t\r") == std::string::npos) {
-  }
-  if (row_line.find_first_not_of(" \t\r") == std::string::npos)
-    throw UserError(file + " has a header but no data row");
+  long rows_seen = 0;
+  bool found = false;
+  while (std::getline(in, row_line))
+    if (row_line.find_first_not_of(" \t\r") != std::string::npos && rows_seen++ == row_index) {
+      found = true;
+      break;
+    }
+  if (!found && rows_seen == 0) throw UserError(file + " has a header but no data row");
+  if (!found)
+    throw UserError(file + " has " + std::to_string(rows_seen) + " data rows; --row " +
+                    std::to_string(row_index) + " is beyond them (0-based)");
   const auto header = split_csv_line(header_line);
   const auto row = split_csv_line(row_line);
   if (row.size() != header.size())
@@ -135,25 +144,48 @@ static s2kf::cli::RegisterCommand reg{
     [](CLI::App& app) {
       struct Options {
         double height = 1750;
+        std::string subject_file;
         std::string pose_file;
+        long row = 0;
         bool joints = false;
       };
       auto options = std::make_shared<Options>();
-      app.add_option("--height", options->height,
-                     "Subject height in mm (every length scales with it; default 1750)");
+      CLI::Option* height_option = app.add_option(
+          "--height", options->height,
+          "Subject height in mm (every length scales with it; default 1750, or the subject file's)");
+      app.add_option(
+          "--subject", options->subject_file,
+          "a subject file (s2kf calibrate), a marker-set file or a bundled set's name: its markers, "
+          "bone lengths and joint limits (the model s2kf track --subject tracks with)");
       app.add_option(
           "--pose", options->pose_file,
-          "Pose file: a pose CSV (header frame,time,root_x,...,root_yaw,BPx,...; first row used) or "
+          "Pose file: a pose CSV (header frame,time,root_x,...,root_yaw,BPx,...; the row --row names) or "
           "JSON {\"root_position\":[x,y,z],\"root_rpy\":[r,p,y],\"joints\":{\"BPx\":...}} (rad)");
+      app.add_option("--row", options->row, "with a pose CSV: the data row to use (0-based, default 0)")
+          ->check(CLI::NonNegativeNumber);
       app.add_flag(
           "--joints", options->joints,
           "Print the joint table (joint,parent,axis,lower,upper,offset_x,offset_y,offset_z) instead of "
           "the markers");
-      app.callback([options] {
+      app.callback([options, height_option] {
         if (!(options->height > 0) || !std::isfinite(options->height))
           throw UserError("--height must be a positive number of millimetres, got " +
                           std::to_string(options->height));
-        const s2kf::body::BodyModel model = s2kf::body::mmm_body_model(options->height);
+        // With a subject: the model as s2kf track --subject builds it (session.hpp's prepare_session).
+        s2kf::body::BodyModel model;
+        if (options->subject_file.empty()) {
+          model = s2kf::body::mmm_body_model(options->height);
+        } else {
+          const s2kf::body::MarkerSet set = s2kf::cli::resolve_marker_set(options->subject_file);
+          const s2kf::body::BodyModel base = s2kf::body::mmm_body_model(set.reference_height_mm);
+          const double height =
+              height_option->count() > 0 ? options->height : set.height_mm.value_or(options->height);
+          try {
+            model = s2kf::body::apply_marker_set(base, set).scaled(height);
+          } catch (const std::invalid_argument& e) {
+            throw UserError(options->subject_file + ": " + e.what());
+          }
+        }
         if (options->joints) {
           if (!options->pose_file.empty())
             throw UserError("--joints prints the joint table; it takes no --pose");
@@ -168,7 +200,7 @@ static s2kf::cli::RegisterCommand reg{
         s2kf::body::Pose pose;
         if (!options->pose_file.empty())
           pose = looks_like_json(options->pose_file) ? read_pose_json(options->pose_file, model)
-                                                     : read_pose_csv(options->pose_file, model);
+                                                     : read_pose_csv(options->pose_file, model, options->row);
         const Eigen::Matrix3Xd markers = s2kf::body::marker_positions(model, pose);
         std::printf("marker,x,y,z\n");
         for (int m = 0; m < model.marker_count(); ++m)

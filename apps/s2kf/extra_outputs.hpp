@@ -31,6 +31,7 @@ struct OutputSettings {
   std::vector<std::string> formats{"csv", "mot", "bvh", "osim", "trc", "mmm"};
   std::string bvh_units = "m";
   bool derivatives = false;
+  double body_mass_kg = 0;  ///< --mass: the .osim's segment masses (0: from the height)
 
   bool wants(const std::string& format) const {
     return std::find(formats.begin(), formats.end(), format) != formats.end();
@@ -40,6 +41,14 @@ struct OutputSettings {
 inline const std::vector<std::string>& known_output_formats() {
   static const std::vector<std::string> formats{"csv", "mot", "bvh", "osim", "trc", "mmm"};
   return formats;
+}
+
+/// --mass: the subject's body mass, which the .osim's segment masses and inertias (de Leva) scale with.
+inline void add_mass_option(CLI::App& app, double& body_mass_kg) {
+  app.add_option("--mass", body_mass_kg,
+                 "body mass in kg for the OpenSim model's segment masses and inertias (de Leva 1996; "
+                 "default: 24.1 kg/m^2 times the height squared)")
+      ->check(CLI::Range(1.0, 500.0));
 }
 
 /// Registers the output options on a command.
@@ -53,6 +62,7 @@ inline void add_output_options(CLI::App& app, OutputSettings& settings) {
       ->check(CLI::IsMember({"m", "cm"}));
   app.add_flag("--derivatives", settings.derivatives,
                "also write PREFIX_vel.csv and PREFIX_acc.csv (finite differences of the motion)");
+  add_mass_option(app, settings.body_mass_kg);
 }
 
 /// The motion files MotionStreamWriter writes for `prefix`.
@@ -134,7 +144,8 @@ inline void write_model_outputs(io::MotionStreamWriter& motion_files, const Outp
   const std::vector<std::string> markers = used_marker_names(model, mapping);
   const std::string name = fs::path(input).stem().string();
   if (settings.wants("osim"))
-    io::write_opensim_model(motion_files.companion(prefix + ".osim"), model, name, markers);
+    io::write_opensim_model(motion_files.companion(prefix + ".osim"), model, name, markers,
+                            settings.body_mass_kg);
   if (!settings.wants("trc")) return;
   std::ostream& trc = motion_files.companion(prefix + ".trc");
   c3d::C3dReader reader(input);
@@ -158,11 +169,13 @@ inline void write_model_outputs(io::MotionStreamWriter& motion_files, const Outp
 /// The OpenSim model of a calibrated subject (`s2kf calibrate --out SUBJECT.json` writes SUBJECT.osim),
 /// written to its temporary file; the caller commits it with the subject file.
 inline std::unique_ptr<io::AtomicFileWriter> prepare_subject_opensim_model(
-    const std::string& subject_path, const body::BodyModel& model, const body::MarkerMapping& mapping) {
+    const std::string& subject_path, const body::BodyModel& model, const body::MarkerMapping& mapping,
+    double body_mass_kg = 0) {
   std::filesystem::path path = subject_path;
   path.replace_extension(".osim");
   auto file = std::make_unique<io::AtomicFileWriter>(path);
-  io::write_opensim_model(file->stream(), model, path.stem().string(), used_marker_names(model, mapping));
+  io::write_opensim_model(file->stream(), model, path.stem().string(), used_marker_names(model, mapping),
+                          body_mass_kg);
   file->check();
   return file;
 }

@@ -30,6 +30,7 @@
 #include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/body/pose_columns.hpp>
+#include <s2kf/body/segment_inertia.hpp>
 #include <s2kf/body/vector_sincos.hpp>
 
 #include <s2kf/io/atomic_file.hpp>

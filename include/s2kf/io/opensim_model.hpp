@@ -6,12 +6,14 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/segment_inertia.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/atomic_file.hpp>
 
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <ostream>
 #include <sstream>
@@ -135,14 +137,15 @@ inline void write_coordinate(std::ostream& out, const std::string& name, double 
       << pad << "</Coordinate>\n";
 }
 
+/// `left_open`: without the closing tag, for the caller to add children (attached geometry).
 inline void write_offset_frame(std::ostream& out, const std::string& name, const std::string& parent_path,
                                const Eigen::Vector3d& translation_m, const Eigen::Vector3d& orientation_xyz,
-                               const std::string& pad) {
+                               const std::string& pad, bool left_open = false) {
   out << pad << "<PhysicalOffsetFrame name=\"" << name << "\">\n"
       << pad << "  <socket_parent>" << parent_path << "</socket_parent>\n"
       << pad << "  <translation>" << osim_vector(translation_m) << "</translation>\n"
-      << pad << "  <orientation>" << osim_vector(orientation_xyz) << "</orientation>\n"
-      << pad << "</PhysicalOffsetFrame>\n";
+      << pad << "  <orientation>" << osim_vector(orientation_xyz) << "</orientation>\n";
+  if (!left_open) out << pad << "</PhysicalOffsetFrame>\n";
 }
 
 inline std::string xml_escaped(const std::string& text) {
@@ -171,24 +174,46 @@ inline std::string xml_escaped(const std::string& text) {
 /// Root translations beyond this (m) are outside any motion capture volume.
 inline constexpr double kOpenSimRootTranslationRangeM = 50.0;
 
-/// Inertial properties are not estimated (markers do not measure them); OpenSim's multibody engine
-/// needs a positive mass on every body, so each gets this placeholder, which the .osim says in its
-/// <credits>. Kinematics (Load Motion, Inverse Kinematics) do not use it; inverse dynamics needs
-/// real segment masses (OpenSim's Scale tool or a hand edit).
-inline constexpr double kOpenSimPlaceholderMassKg = 1.0;
-inline constexpr double kOpenSimPlaceholderInertiaKgM2 = 0.01;
+/// A body no segment of de Leva's table rides on (the neck's BLN, the elbow's flexion-only frame):
+/// no mass, no inertia. Simbody accepts massless bodies that have a massive body beyond them.
+inline constexpr double kOpenSimMasslessKg = 0.0;
 
-/// The .osim of `model` (metres, radians). Coordinates: root_x, root_y, root_z (m, lab frame), root_roll,
-/// root_pitch, root_yaw (rad, R = Rz(yaw) Ry(pitch) Rx(roll)) on a 6-DoF CustomJoint "ground_pelvis",
-/// and one coordinate per model joint under its own name with its limits as range (clamped); the
-/// defaults are the zero pose standing on the floor (root_z = the height of the root above the lowest
+namespace detail {
+
+/// The semi-axes (mm) of the ellipsoid drawn for a segment: half its length along its long axis,
+/// and across it those of the uniform solid ellipsoid with the segment's moments of inertia
+/// (a_x^2 = 5 (I_y + I_z - I_x) / (2 m), ...), at least a tenth of the length.
+inline Eigen::Vector3d segment_ellipsoid_radii_mm(const body::SegmentInertia& segment) {
+  const Eigen::Vector3d axis = segment.distal_mm - segment.proximal_mm;
+  const double length_mm = axis.norm();
+  Eigen::Vector3d radii;
+  int long_axis = 0;
+  axis.cwiseAbs().maxCoeff(&long_axis);
+  const Eigen::Vector3d& moments = segment.moments_kg_m2;
+  for (int k = 0; k < 3; ++k) {
+    const double squared_m2 =
+        2.5 * (moments((k + 1) % 3) + moments((k + 2) % 3) - moments(k)) / segment.mass_kg;
+    radii(k) = std::max(1000.0 * std::sqrt(std::max(squared_m2, 0.0)), 0.1 * length_mm);
+  }
+  radii(long_axis) = 0.5 * length_mm;
+  return radii;
+}
+
+}  // namespace detail
+
+/// The .osim of `model` (metres, radians, kilograms). Coordinates: root_x, root_y, root_z (m, lab frame),
+/// root_roll, root_pitch, root_yaw (rad, R = Rz(yaw) Ry(pitch) Rx(roll)) on a 6-DoF CustomJoint
+/// "ground_pelvis", and one coordinate per model joint under its own name with its limits as range (clamped);
+/// the defaults are the zero pose standing on the floor (root_z = the height of the root above the lowest
 /// marker). The MarkerSet holds the markers named in `marker_names` (all of the model's when empty)
-/// at their offsets on their bodies.
+/// at their offsets on their bodies. Bodies carry de Leva's segment masses and inertias for a subject
+/// of `body_mass_kg` (0: body::default_body_mass_kg of the model's height) and an ellipsoid of the
+/// segment's size (OpenSim's analytic geometry, no mesh files) so that the GUI shows the skeleton.
 void write_opensim_model(std::ostream& out, const body::BodyModel& model, const std::string& name,
-                         const std::vector<std::string>& marker_names = {});
+                         const std::vector<std::string>& marker_names = {}, double body_mass_kg = 0);
 
 void save_opensim_model(const std::string& path, const body::BodyModel& model, const std::string& name,
-                        const std::vector<std::string>& marker_names = {});
+                        const std::vector<std::string>& marker_names = {}, double body_mass_kg = 0);
 
 }  // namespace s2kf::io
 

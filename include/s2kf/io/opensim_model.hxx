@@ -9,8 +9,10 @@
 namespace s2kf::io {
 
 S2KF_INLINE void write_opensim_model(std::ostream& out, const body::BodyModel& model, const std::string& name,
-                                     const std::vector<std::string>& marker_names) {
+                                     const std::vector<std::string>& marker_names, double body_mass_kg) {
   model.validate();
+  if (body_mass_kg == 0) body_mass_kg = body::default_body_mass_kg(model.height_mm);
+  const std::vector<body::SegmentInertia> inertia = body::de_leva_segment_inertia(model, body_mass_kg);
   const std::vector<detail::OsimBody> bodies = detail::osim_bodies(model);
   std::vector<int> body_of_frame(model.frame_count(), -1);
   body_of_frame[0] = 0;
@@ -35,23 +37,48 @@ S2KF_INLINE void write_opensim_model(std::ostream& out, const body::BodyModel& m
       << "<OpenSimDocument Version=\"40000\">\n"
       << "  <Model name=\"" << detail::xml_escaped(name) << "\">\n"
       << "    <credits>Written by s2kf: the " << model.joint_count()
-      << "-joint MMM-style body model at the subject's calibrated bone lengths. Masses and inertias are "
-         "placeholders ("
-      << kOpenSimPlaceholderMassKg << " kg, " << kOpenSimPlaceholderInertiaKgM2
-      << " kg m^2 per body), not estimates.</credits>\n"
-      << "    <publications>Terlemez et al., Master Motor Map (MMM), Humanoids 2014</publications>\n"
+      << "-joint MMM-style body model at the subject's calibrated bone lengths. Segment masses, centres of "
+         "mass and inertias: de Leva (1996) for a body mass of "
+      << std::setprecision(6) << body_mass_kg << " kg, not estimated from the motion.</credits>\n"
+      << "    <publications>Terlemez et al., Master Motor Map (MMM), Humanoids 2014; de Leva, Adjustments to "
+         "Zatsiorsky-Seluyanov's segment inertia parameters, J. Biomech. 29(9), 1996</publications>\n"
       << "    <length_units>meters</length_units>\n"
       << "    <force_units>N</force_units>\n"
       << "    <gravity>0 -9.80665 0</gravity>\n"
       << "    <Ground name=\"ground\" />\n"
       << "    <BodySet name=\"bodyset\">\n      <objects>\n";
-  for (const detail::OsimBody& body : bodies)
-    out << p8 << "<Body name=\"" << body.name << "\">\n"
-        << p10 << "<mass>" << kOpenSimPlaceholderMassKg << "</mass>\n"
-        << p10 << "<mass_center>0 0 0</mass_center>\n"
-        << p10 << "<inertia>" << kOpenSimPlaceholderInertiaKgM2 << " " << kOpenSimPlaceholderInertiaKgM2
-        << " " << kOpenSimPlaceholderInertiaKgM2 << " 0 0 0</inertia>\n"
+  for (const detail::OsimBody& body : bodies) {
+    const std::string segment = body.first_joint < 0 ? std::string("root") : body.name;
+    const auto found = std::find_if(inertia.begin(), inertia.end(),
+                                    [&](const body::SegmentInertia& s) { return s.segment == segment; });
+    out << p8 << "<Body name=\"" << body.name << "\">\n";
+    if (found == inertia.end()) {
+      out << p10 << "<mass>" << kOpenSimMasslessKg << "</mass>\n"
+          << p10 << "<mass_center>0 0 0</mass_center>\n"
+          << p10 << "<inertia>0 0 0 0 0 0</inertia>\n"
+          << p8 << "</Body>\n";
+      continue;
+    }
+    // An ellipsoid on an offset frame at the middle of the segment, axes along the body's.
+    out << p10 << "<components>\n";
+    detail::write_offset_frame(out, body.name + "_geometry_frame", "..",
+                               0.5 * (found->proximal_mm + found->distal_mm) / 1000.0,
+                               Eigen::Vector3d::Zero(), p12, true);
+    out << p12 << "  <attached_geometry>\n"
+        << p12 << "    <Ellipsoid name=\"" << body.name << "_geometry\">\n"
+        << p12 << "      <socket_frame>..</socket_frame>\n"
+        << p12 << "      <radii>" << detail::osim_vector(detail::segment_ellipsoid_radii_mm(*found) / 1000.0)
+        << "</radii>\n"
+        << p12 << "    </Ellipsoid>\n"
+        << p12 << "  </attached_geometry>\n"
+        << p12 << "</PhysicalOffsetFrame>\n"
+        << p10 << "</components>\n"
+        << p10 << "<mass>" << std::setprecision(12) << found->mass_kg << "</mass>\n"
+        << p10 << "<mass_center>" << detail::osim_vector(found->centre_of_mass_mm / 1000.0)
+        << "</mass_center>\n"
+        << p10 << "<inertia>" << detail::osim_vector(found->moments_kg_m2) << " 0 0 0</inertia>\n"
         << p8 << "</Body>\n";
+  }
   out << "      </objects>\n    </BodySet>\n"
       << "    <JointSet name=\"jointset\">\n      <objects>\n";
 
@@ -135,9 +162,10 @@ S2KF_INLINE void write_opensim_model(std::ostream& out, const body::BodyModel& m
 }
 
 S2KF_INLINE void save_opensim_model(const std::string& path, const body::BodyModel& model,
-                                    const std::string& name, const std::vector<std::string>& marker_names) {
-  write_file_atomically(path,
-                        [&](std::ostream& out) { write_opensim_model(out, model, name, marker_names); });
+                                    const std::string& name, const std::vector<std::string>& marker_names,
+                                    double body_mass_kg) {
+  write_file_atomically(
+      path, [&](std::ostream& out) { write_opensim_model(out, model, name, marker_names, body_mass_kg); });
 }
 
 }  // namespace s2kf::io
