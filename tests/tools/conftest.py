@@ -15,7 +15,7 @@ import opensim_peer  # noqa: E402
 
 # The bundled recordings (a subject's first 300 frames suffice for the calibration and keep this
 # quick) and one simulated here; with --mass for one, the default mass for the others.
-RECORDINGS = {"handstand": [], "walk": ["--mass", "68.5"], "simulated_squats": []}
+RECORDINGS = {"handstand": [], "walk": ["--mass", "68.5"], "cartwheel": [], "simulated_squats": []}
 
 
 @pytest.fixture(scope="session")
