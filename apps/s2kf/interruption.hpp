@@ -26,9 +26,17 @@ struct Interrupted : std::runtime_error {
 namespace interruption_detail {
 inline std::atomic<int> caught_signal{0};  // 0, or the signal received
 inline std::atomic<int> open_output_sets{0};
+// s2kf live: the first signal only ends the stream (its frames are then written), a second one
+// interrupts as usual.
+inline std::atomic<bool> first_signal_ends_stream{false};
+inline std::atomic<int> stream_end_signal{0};
 static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
 
 inline void on_signal(int signal_number) {
+  if (first_signal_ends_stream.exchange(false)) {
+    stream_end_signal.store(signal_number);
+    return;
+  }
   caught_signal.store(signal_number);
   if (open_output_sets.load() == 0) {
     // Nothing to clean up: end now (only async-signal-safe calls here).
@@ -45,6 +53,12 @@ inline void install_interrupt_handlers() {
   std::signal(SIGINT, interruption_detail::on_signal);
   std::signal(SIGTERM, interruption_detail::on_signal);
 }
+
+/// From now on the first SIGINT or SIGTERM ends a stream instead of interrupting (s2kf live).
+inline void let_first_signal_end_stream() { interruption_detail::first_signal_ends_stream.store(true); }
+
+/// True once a signal asked the stream to end.
+inline bool stream_end_requested() { return interruption_detail::stream_end_signal.load() != 0; }
 
 /// Throws Interrupted when SIGINT or SIGTERM arrived: call it between frames and before a commit.
 inline void throw_if_interrupted() {

@@ -60,9 +60,8 @@ constexpr long kTruthWarmupFrames = 20;
 /// output files; returns the summary and the paragraph to print.
 TrackOutcome track_file(const std::string& input, const std::string& prefix, const TrackSettings& settings,
                         bool show_progress) {
-  throw_if_interrupted();     // a batch stops at the next recording
-  track::StageTimes outside;  // stages outside the session and the run: opening, finishing the files
-  auto stage_start = std::chrono::steady_clock::now();
+  throw_if_interrupted();  // a batch stops at the next recording
+  const auto stage_start = std::chrono::steady_clock::now();
   std::unique_ptr<c3d::C3dFrameSource> source;
   try {
     source = std::make_unique<c3d::C3dFrameSource>(input);
@@ -71,7 +70,7 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
-  outside.read = track::seconds_since(stage_start);
+  const double opening = track::seconds_since(stage_start);
   const c3d::C3dInfo& info = source->info();
   // Everything that can be checked is checked before tracking: a late failure would waste the run.
   if (!c3d::plausible_frame_rate(info.rate))  // the reader gives 0 for none that is a positive number
@@ -82,6 +81,26 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                                          c3d::detail::format_number(c3d::kPlausibleFrameRateHz[1]) + " Hz)"
                                    : std::string("no valid frame rate in its header or POINT:RATE")) +
                     "; correct POINT:RATE");
+  TrackInput recording;
+  recording.name = input;
+  recording.stem = fs::path(input).stem().string();
+  recording.prepare = source.get();
+  recording.frames = source.get();
+  recording.rate_hz = info.rate;
+  recording.frame_count = info.frame_count;
+  for (const c3d::PointLabel& label : info.labels)
+    if (label.model_output) recording.model_outputs.push_back(label.raw);
+  recording.warnings = info.warnings;
+  recording.open_seconds = opening;
+  return track_source(recording, prefix, settings, show_progress);
+}
+
+TrackOutcome track_source(const TrackInput& input, const std::string& prefix, const TrackSettings& settings,
+                          bool show_progress, const TrackHooks& extra) {
+  track::StageTimes outside;  // stages outside the session and the run: opening, finishing the files
+  outside.read = input.open_seconds;
+  auto stage_start = std::chrono::steady_clock::now();
+  const bool known_length = input.frame_count >= 0;
   // Ground truth, read before tracking so a wrong file fails fast.
   std::optional<io::MotionTable> truth;
   if (!settings.truth.empty()) {
@@ -90,29 +109,29 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     } catch (const std::exception& e) {
       throw UserError(std::string("--truth: ") + e.what());
     }
-    if (truth->frames() != info.frame_count)
+    if (known_length && truth->frames() != input.frame_count)
       throw UserError("--truth: " + settings.truth + " has " + std::to_string(truth->frames()) +
-                      " rows, but " + input + " has " + std::to_string(info.frame_count) + " frames");
+                      " rows, but " + input.name + " has " + std::to_string(input.frame_count) + " frames");
   }
   const bool with_rates =
       settings.motion_model.empty()
           ? track::TrackerOptions{}.motion_model == track::MotionModel::constant_velocity
           : track::motion_model_from_name(settings.motion_model) == track::MotionModel::constant_velocity;
-  const double smoothing_bytes = static_cast<double>(info.frame_count) *
+  const double smoothing_bytes = static_cast<double>(std::max<std::int64_t>(0, input.frame_count)) *
                                  static_cast<double>(track::TrackingSmoother::bytes_per_frame(with_rates));
   if (settings.smooth && smoothing_bytes > kSmoothingMemoryLimitBytes)
-    throw UserError(input + ": " + std::to_string(info.frame_count) +
+    throw UserError(input.name + ": " + std::to_string(input.frame_count) +
                     " frames are too many to smooth in memory (" + fixed_text(smoothing_bytes / 1e9, 1) +
                     " GB); track without --smooth, or split the recording");
-  if (settings.figure_frame >= info.frame_count)
-    throw UserError(input + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
-                    std::to_string(info.frame_count) + " frames (0-based)");
+  if (known_length && settings.figure_frame >= input.frame_count)
+    throw UserError(input.name + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
+                    std::to_string(input.frame_count) + " frames (0-based)");
 
-  const MarkerSetChoice choice = choose_or_infer_marker_set(input, source->labels(), settings.markerset,
-                                                            settings.subject, prefix + "_markerset.json");
+  const MarkerSetChoice choice = choose_or_infer_marker_set(
+      input.name, input.prepare->labels(), settings.markerset, settings.subject, prefix + "_markerset.json");
   pipeline::SessionOptions session_options;
   try {
-    session_options.tracker = track::preset_options(settings.preset, info.rate);
+    session_options.tracker = track::preset_options(settings.preset, input.rate_hz);
   } catch (const std::invalid_argument& e) {
     throw UserError(e.what());
   }
@@ -132,9 +151,9 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     session_options.calibration_samples = cached_sample_set(46, settings.calibration_samples);
   pipeline::Session session;
   try {
-    session = pipeline::prepare_session(*source, choice.set, session_options, samples);
+    session = pipeline::prepare_session(*input.prepare, choice.set, session_options, samples);
   } catch (const std::invalid_argument& e) {
-    throw UserError(input + ": " + e.what());
+    throw UserError(input.name + ": " + e.what());
   }
   if (truth && truth->joint_names != session.model.joint_names())
     throw UserError(
@@ -143,23 +162,23 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   // Model outputs never match a marker; the summary lists them under their names in the file.
   // (ignored labels keep the file's order, so the k-th empty one is the k-th model output).
   auto empty = session.mapping.ignored_labels.begin();
-  for (const c3d::PointLabel& label : info.labels)
-    if (label.model_output) {
-      empty = std::find(empty, session.mapping.ignored_labels.end(), std::string());
-      if (empty != session.mapping.ignored_labels.end()) *empty++ = label.raw;
-    }
-  std::vector<std::string> warnings = info.warnings;
+  for (const std::string& model_output : input.model_outputs) {
+    empty = std::find(empty, session.mapping.ignored_labels.end(), std::string());
+    if (empty != session.mapping.ignored_labels.end()) *empty++ = model_output;
+  }
+  std::vector<std::string> warnings = input.warnings;
   warnings.insert(warnings.end(), session.warnings.begin(), session.warnings.end());
   const std::vector<std::string> messages = marker_set_messages(choice, session.mapping);
 
   const auto start = std::chrono::steady_clock::now();
-  const double frame_period = 1.0 / info.rate;
+  const double frame_period = 1.0 / input.rate_hz;
   long deadline_misses = 0;
   c3d::Frame figure_points;  // the frame --figure draws, as recorded
   pipeline::RunHooks hooks;
   hooks.on_read = [&](const MarkerFrame& frame) {
     throw_if_interrupted();
     if (frame.index == settings.figure_frame) figure_points = frame;
+    if (extra.on_read) extra.on_read(frame);
     if (settings.realtime)
       std::this_thread::sleep_until(
           start + std::chrono::duration<double>(static_cast<double>(frame.index) * frame_period));
@@ -170,13 +189,13 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
                           (static_cast<double>(index) + 1) * frame_period;
       if (late > 0) ++deadline_misses;
     }
-    if (show_progress && (index % 25 == 0 || index + 1 == info.frame_count)) {
+    if (show_progress && known_length && (index % 25 == 0 || index + 1 == input.frame_count)) {
       const int width = 40;
-      const double done = static_cast<double>(index + 1) / static_cast<double>(info.frame_count);
-      std::cerr << "\r" << fs::path(input).filename().string() << " ["
+      const double done = static_cast<double>(index + 1) / static_cast<double>(input.frame_count);
+      std::cerr << "\r" << fs::path(input.name).filename().string() << " ["
                 << std::string(static_cast<std::size_t>(done * width), '#')
                 << std::string(width - static_cast<std::size_t>(done * width), ' ') << "] " << index + 1
-                << "/" << info.frame_count << std::flush;
+                << "/" << input.frame_count << std::flush;
     }
   };
   // Outputs, all or none: every file goes to a temporary name and the whole set is renamed into
@@ -184,12 +203,12 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   // then removes the temporary files and leaves existing outputs as they were. Rows go to the files
   // as they are produced: as tracked (memory stays constant however long the recording is), or
   // after the backward pass with --smooth.
-  const std::string name = fs::path(input).stem().string();
+  const std::string& name = input.stem;
   stage_start = std::chrono::steady_clock::now();
   const OpenOutputs open_outputs;  // SIGINT/SIGTERM now wait for throw_if_interrupted()
-  io::MotionStreamWriter motion_files(motion_file_paths(prefix, settings.outputs), session.model, info.rate,
-                                      name, bvh_units(settings.outputs));
-  write_model_outputs(motion_files, settings.outputs, prefix, input, session.model,
+  io::MotionStreamWriter motion_files(motion_file_paths(prefix, settings.outputs), session.model,
+                                      input.rate_hz, name, bvh_units(settings.outputs));
+  write_model_outputs(motion_files, settings.outputs, prefix, input.name, session.model,
                       session.mapping);  // .osim, .trc
   outside.writing = track::seconds_since(stage_start);
   std::ostream& marker_report = motion_files.companion(prefix + "_markers.csv");
@@ -204,23 +223,25 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
     write_segment_report_row(segment_report, session, f);
     if (f.frame == settings.figure_frame && io::is_tracked_row(f.values))
       figure_pose = body::pose_from_row(f.values);
+    if (extra.on_row) extra.on_row(f);
   };
   pipeline::RunOptions run_options;
   run_options.method = settings.method == "s2kf" ? pipeline::Method::s2kf : pipeline::Method::baseline;
   run_options.smooth = settings.smooth;
   track::TrackingRun run;
   try {
-    run = pipeline::run_session(session, *source, samples, run_options, hooks);
+    run = pipeline::run_session(session, *input.frames, samples, run_options, hooks);
   } catch (const std::invalid_argument& e) {
-    throw UserError(input + ": " + e.what());
+    throw UserError(input.name + ": " + e.what());
   }
   if (show_progress) std::cerr << "\n";
   if (run.frames_tracked == 0)
-    throw UserError(input + ": no frame has the " + std::to_string(session.tracker.min_markers_to_start) +
+    throw UserError(input.name + ": no frame has the " +
+                    std::to_string(session.tracker.min_markers_to_start) +
                     " visible markers needed to start tracking");
   if (2 * run.frames_prediction_only > run.frames_tracked)
-    throw UserError(input + ": the filter's update failed in " + std::to_string(run.frames_prediction_only) +
-                    " of " + std::to_string(run.frames_tracked) +
+    throw UserError(input.name + ": the filter's update failed in " +
+                    std::to_string(run.frames_prediction_only) + " of " + std::to_string(run.frames_tracked) +
                     " tracked frames, which only repeat its prediction; no result is written (" +
                     (run.warnings.empty() ? std::string("see the header and labels") : run.warnings.front()) +
                     ")");
@@ -249,13 +270,14 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
       throw UserError("--truth: " + settings.truth + ": " + e.what());
     }
   }
-  nlohmann::json summary = track_summary(input, settings.method, choice, messages, session, run,
+  nlohmann::json summary = track_summary(input.name, settings.method, choice, messages, session, run,
                                          settings.smooth, warnings, settings.calibration_shrink, outside);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
   if (accuracy) {
     summary["truth"] = truth_json(*accuracy);
     summary["truth"]["warmup_frames"] = kTruthWarmupFrames;
   }
+  if (extra.on_summary) extra.on_summary(summary);
   // Labels and file names are UTF-8 (the reader decodes Latin-1); anything else is replaced, never
   // a reason to lose the run.
   motion_files.companion(prefix + ".json")

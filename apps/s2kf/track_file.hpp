@@ -6,9 +6,13 @@
 #include "extra_outputs.hpp"
 
 #include <s2kf/calibration/subject_calibration.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/track/tracking_run.hpp>
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,6 +54,34 @@ struct TrackOutcome {
   nlohmann::json summary;
   std::string paragraph;
 };
+
+/// What track_source needs of a recording: the frames to prepare the session on and the frames to
+/// track (the same source for a file; a first stretch and the stream for s2kf live), and what is
+/// known about them.
+struct TrackInput {
+  std::string name;                ///< in front of errors and in the summary: a path, or HOST:PORT
+  std::string stem;                ///< the motion's name in the files (BVH)
+  FrameSource* prepare = nullptr;  ///< frames the height and the calibration are taken from
+  FrameSource* frames = nullptr;   ///< frames tracked, read in order until read() says false
+  double rate_hz = 0;
+  std::int64_t frame_count = -1;           ///< -1: not known in advance (a stream)
+  std::vector<std::string> model_outputs;  ///< labels of model outputs (C3D), in the file's order
+  std::vector<std::string> warnings;
+  double open_seconds = 0;  ///< spent opening the source (the summary's read stage)
+};
+
+/// What a caller adds to a run: each frame as read, each row after it went to the files, and the
+/// summary before it is written.
+struct TrackHooks {
+  std::function<void(const MarkerFrame&)> on_read;
+  std::function<void(const track::TrackedFrame&)> on_row;
+  std::function<void(nlohmann::json&)> on_summary;
+};
+
+/// Tracks a recording through the library's pipeline (prepare a session, run it) into the output
+/// files, all or none; returns the summary and the paragraph to print.
+TrackOutcome track_source(const TrackInput& input, const std::string& prefix, const TrackSettings& settings,
+                          bool show_progress, const TrackHooks& hooks = {});
 
 /// Tracks one recording through the library's pipeline (prepare a session, run it) into the
 /// output files; returns the summary and the paragraph to print.

@@ -50,6 +50,13 @@
 #include <s2kf/io/sample_cache.hpp>
 #include <s2kf/io/trc_file.hpp>
 
+#include <s2kf/live/live_feed.hpp>
+#include <s2kf/live/live_frame_source.hpp>
+#include <s2kf/live/packet_channel.hpp>
+#include <s2kf/live/qtm_client.hpp>
+#include <s2kf/live/qtm_protocol.hpp>
+#include <s2kf/live/qtm_server.hpp>
+#include <s2kf/live/udp_sender.hpp>
 #include <s2kf/sim/keyframe_motion.hpp>
 #include <s2kf/sim/monotone_cubic.hpp>
 #include <s2kf/sim/occlusion.hpp>

@@ -1,0 +1,256 @@
+// `s2kf live HOST[:PORT]`: track a motion capture system's stream (the QTM real-time protocol) as
+// it arrives, with the tracker `s2kf track` uses, sending every pose out over UDP as it is made,
+// and write the same files as `s2kf track` when the stream ends.
+#include "command.hpp"
+#include "extra_outputs.hpp"
+#include "interruption.hpp"
+#include "track_file.hpp"
+#include "track_summary.hpp"
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/pose.hpp>
+#include <s2kf/live/live_feed.hpp>
+#include <s2kf/live/live_frame_source.hpp>
+#include <s2kf/live/udp_sender.hpp>
+#include <s2kf/track/tracking_metrics.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace s2kf::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct LiveSettings {
+  std::string address;  // HOST[:PORT]
+  TrackSettings track;
+  double calibration_seconds = 10;
+  long frames = -1;
+  double seconds = -1;
+  int backlog = 4;
+  double reconnect_seconds = 10;
+  double max_gap_seconds = 1;
+  std::string udp_json;  // HOST:PORT
+};
+
+/// HOST, HOST:PORT, [IPv6]:PORT.
+std::pair<std::string, std::uint16_t> split_address(const std::string& text, std::uint16_t default_port) {
+  std::string host = text;
+  std::string port;
+  if (!text.empty() && text.front() == '[') {
+    const std::size_t close = text.find(']');
+    if (close == std::string::npos) throw UserError("the address " + text + " opens [ but does not close it");
+    host = text.substr(1, close - 1);
+    if (close + 1 < text.size()) {
+      if (text[close + 1] != ':')
+        throw UserError("the address " + text + " has something after ] that is not :PORT");
+      port = text.substr(close + 2);
+    }
+  } else if (std::count(text.begin(), text.end(), ':') == 1) {
+    host = text.substr(0, text.find(':'));
+    port = text.substr(text.find(':') + 1);
+  }
+  if (host.empty()) throw UserError("the address " + text + " names no host");
+  if (port.empty()) return {host, default_port};
+  char* end = nullptr;
+  const long value = std::strtol(port.c_str(), &end, 10);
+  if (*end != '\0' || value < 1 || value > 65535)
+    throw UserError("the port in " + text + " is not 1 to 65535");
+  return {host, static_cast<std::uint16_t>(value)};
+}
+
+/// One UDP datagram per tracked frame: {"frame":F,"time":T,"tracked":true,"pose":{"root_x":...}}.
+std::string pose_message(const track::TrackedFrame& row, const std::vector<std::string>& columns) {
+  std::ostringstream out;
+  out.precision(9);
+  out << "{\"frame\":" << row.frame << ",\"time\":" << row.time
+      << ",\"visible_markers\":" << row.visible_markers << ",\"pose\":{";
+  for (Eigen::Index c = 0; c < row.values.size(); ++c) {
+    out << (c ? "," : "") << '"' << columns[static_cast<std::size_t>(c)] << "\":";
+    if (std::isfinite(row.values(c)))
+      out << row.values(c);
+    else
+      out << "null";
+  }
+  out << "}}\n";
+  return out.str();
+}
+
+void run_live(LiveSettings settings) {
+  TrackSettings& track = settings.track;
+  if (!track.markerset.empty() && !track.subject.empty())
+    throw UserError("give --markerset or --subject, not both (a subject file is a calibrated marker set)");
+  const auto [host, port] = split_address(settings.address, live::kDefaultPort);
+  const std::string name = host + ":" + std::to_string(port);
+  const std::string prefix = track.out.empty() ? "live" : track.out;
+  check_outputs(track.outputs, {prefix}, false);
+  std::optional<live::UdpSender> udp;
+  if (!settings.udp_json.empty()) {
+    const auto [udp_host, udp_port] = split_address(settings.udp_json, 0);
+    if (udp_port == 0) throw UserError("--udp-json needs HOST:PORT");
+    try {
+      udp.emplace(udp_host, udp_port);
+    } catch (const live::ConnectionError& e) {
+      throw UserError(std::string("--udp-json: ") + e.what());
+    }
+  }
+
+  let_first_signal_end_stream();
+  live::FeedOptions feed_options;
+  feed_options.backlog = static_cast<std::size_t>(settings.backlog);
+  feed_options.reconnect_seconds = settings.reconnect_seconds;
+  feed_options.log = [quiet = track.quiet](const std::string& line) {
+    if (!quiet) std::cerr << "s2kf live: " << line << std::endl;
+  };
+  std::unique_ptr<live::LiveFeed> feed;
+  try {
+    feed = std::make_unique<live::LiveFeed>(host, port, feed_options);
+  } catch (const live::ConnectionError& e) {
+    throw UserError(e.what());
+  } catch (const live::ProtocolError& e) {
+    throw UserError(name + ": " + e.what());
+  }
+  const double rate = feed->parameters().rate_hz;
+  if (!track.quiet)
+    std::cerr << "s2kf live: connected to " << name << ": " << feed->parameters().labels.size()
+              << " labels at " << rate << " Hz" << std::endl;
+
+  live::LiveSourceOptions source_options;
+  source_options.max_frames = settings.frames;
+  source_options.max_seconds = settings.seconds;
+  source_options.max_gap_seconds = settings.max_gap_seconds;
+  source_options.stop_requested = [] { return stream_end_requested(); };
+  live::LiveFrameSource source(*feed, source_options);
+  // The session is prepared on a first stretch: a calibrated subject needs one second (the height
+  // check), a calibration --calibration-seconds.
+  const double first_seconds = track.subject.empty() && track.calibrate ? settings.calibration_seconds : 1.0;
+  const auto first_frames = std::max<std::int64_t>(1, std::llround(first_seconds * rate));
+  if (!track.quiet && track.subject.empty() && track.calibrate)
+    std::cerr << "s2kf live: calibrating the subject on the first " << first_frames << " frames" << std::endl;
+  const MarkerSequence& first = source.hold_first(first_frames);
+  if (first.frame_count() == 0)
+    throw UserError(name + ": the stream ended before its first frame (" + feed->ended_reason() + ")");
+  SequenceFrameSource prepare(first);
+
+  TrackInput input;
+  input.name = name;
+  input.stem = "live";
+  input.prepare = &prepare;
+  input.frames = &source;
+  input.rate_hz = rate;
+  input.frame_count = -1;
+  track.calibration_frames = static_cast<int>(first.frame_count());
+
+  const std::vector<std::string> columns = body::pose_column_names(body::mmm_body_model(1000).joint_names());
+  std::vector<double> latency_ms;
+  long deadline_misses = 0;
+  const double period_ms = 1000.0 / rate;
+  TrackHooks hooks;
+  hooks.on_row = [&](const track::TrackedFrame& row) {
+    if (udp) udp->send(pose_message(row, columns));
+    if (row.frame == source.last_arrival_index()) {
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - source.last_arrival())
+              .count();
+      latency_ms.push_back(ms);
+      if (ms > period_ms) ++deadline_misses;
+    }
+  };
+  hooks.on_summary = [&](nlohmann::json& summary) {
+    const live::FeedCounts counts = feed->counts();
+    nlohmann::json live;
+    live["address"] = name;
+    live["protocol"] =
+        "QTM real-time " + std::to_string(live::kProtocolMajor) + "." + std::to_string(live::kProtocolMinor);
+    live["rate_hz"] = rate;
+    live["end"] = source.stopped() ? std::string("stopped (signal)") : feed->ended_reason();
+    live["frames_received"] = counts.received;
+    live["frames_dropped_busy"] = counts.dropped;
+    live["frames_missing"] = source.missing_frames();
+    live["frames_filled"] = source.filled_frames();
+    live["calibration_frames"] = first.frame_count();
+    live["reconnects"] = counts.reconnects;
+    live["label_changes"] = counts.label_changes;
+    live["latency_ms"] = {
+        {"frames", latency_ms.size()},
+        {"median", track::quantile(latency_ms, 0.5)},
+        {"p99", track::quantile(latency_ms, 0.99)},
+        {"max", latency_ms.empty() ? std::nan("") : *std::max_element(latency_ms.begin(), latency_ms.end())},
+        {"deadline_ms", period_ms},
+        {"deadline_misses", deadline_misses}};
+    if (udp)
+      live["udp_json"] = {{"address", settings.udp_json}, {"sent", udp->sent()}, {"dropped", udp->dropped()}};
+    summary["live"] = live;
+  };
+  if (fs::path(prefix).has_parent_path()) fs::create_directories(fs::path(prefix).parent_path());
+  TrackOutcome outcome = track_source(input, prefix, track, false, hooks);
+  const bool failed = feed->failed();
+  const std::string why = feed->ended_reason();
+  feed->stop();
+  if (!track.quiet) {
+    std::cout << outcome.paragraph << "\n";
+    const nlohmann::json& live = outcome.summary["live"];
+    std::cout << "Stream: " << live["frames_received"] << " frames received, " << live["frames_dropped_busy"]
+              << " dropped while busy, " << live["frames_missing"] << " missing; latency median "
+              << fixed_text(live["latency_ms"]["median"].get<double>(), 3) << " ms, p99 "
+              << fixed_text(live["latency_ms"]["p99"].get<double>(), 3)
+              << " ms; ended: " << live["end"].get<std::string>() << ".\n";
+  }
+  if (failed)
+    throw UserError(name + ": " + why + "; the " + std::to_string(outcome.summary.value("frames", 0L)) +
+                    " frames tracked until then are written");
+}
+
+const RegisterCommand live_registration{
+    "live", "Track a motion capture system's stream (QTM real-time protocol) as it arrives",
+    [](CLI::App& app) {
+      auto settings = std::make_shared<LiveSettings>();
+      TrackSettings& track = settings->track;
+      app.add_option("address", settings->address, "the server, HOST or HOST:PORT (default port 22223)")
+          ->required();
+      app.add_option("--out", track.out, "prefix of the output files (default: live)");
+      app.add_option("--markerset", track.markerset,
+                     "marker set: a bundled name or a JSON file (default: the best)");
+      app.add_option("--subject", track.subject, "calibrated subject file written by s2kf calibrate");
+      app.add_option("--calibration-seconds", settings->calibration_seconds,
+                     "calibrate the subject on this first stretch of the stream (default 10)")
+          ->check(CLI::Range(0.1, 3600.0));
+      app.add_flag("!--no-calibrate", track.calibrate, "track with the marker set's subject as it is");
+      app.add_option("--height", track.height_mm, "body height in mm (default: estimated)")
+          ->check(CLI::Range(300.0, 3000.0));
+      app.add_option("--samples", track.samples, "S2KF sample count (default 301)")
+          ->check(CLI::Range(3, 100001));
+      app.add_option("--preset", track.preset, "noise preset: default or paper")
+          ->check(CLI::IsMember({"default", "paper"}));
+      app.add_option("--frames", settings->frames, "end after N frames")->check(CLI::PositiveNumber);
+      app.add_option("--seconds", settings->seconds, "end after S seconds of stream")
+          ->check(CLI::PositiveNumber);
+      app.add_option("--backlog", settings->backlog,
+                     "frames kept while the tracker is busy; older ones are dropped and counted (default 4)")
+          ->check(CLI::Range(1, 1000000));
+      app.add_option("--reconnect-seconds", settings->reconnect_seconds,
+                     "after a lost connection, try again for this long (default 10)")
+          ->check(CLI::Range(0.0, 86400.0));
+      app.add_option("--max-gap", settings->max_gap_seconds,
+                     "missing frames up to this many seconds are predicted frame by frame (default 1)")
+          ->check(CLI::Range(0.0, 60.0));
+      app.add_option("--udp-json", settings->udp_json,
+                     "send every pose as one JSON line to HOST:PORT over UDP");
+      app.add_flag("--quiet", track.quiet, "print nothing but errors");
+      add_output_options(app, track.outputs);
+      app.callback([settings] { run_live(*settings); });
+    }};
+
+}  // namespace
+}  // namespace s2kf::cli

@@ -1,0 +1,179 @@
+// `s2kf live` against `s2kf serve` over loopback: the same joint angles as `s2kf track` on the same
+// file with the same subject, the faults of a stream, and a refused connection.
+#include "address_sanitizer.hpp"
+#include "cli_runner.hpp"
+#include "test_files.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace s2kf::test_support;
+
+/// `s2kf serve RECORDING --port 0 OPTIONS` as a child process, ended with the test.
+class Server {
+ public:
+  Server(const std::string& recording, const fs::path& dir, const std::vector<std::string>& options = {}) {
+    const fs::path port_file = dir / "port";
+    fs::remove(port_file);
+    std::vector<std::string> arguments{S2KF_CLI, "serve",   recording,     "--port",
+                                       "0",      "--quiet", "--port-file", port_file.string()};
+    arguments.insert(arguments.end(), options.begin(), options.end());
+    std::vector<char*> argv;
+    for (std::string& a : arguments) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    EXPECT_EQ(posix_spawn(&pid_, S2KF_CLI, nullptr, nullptr, argv.data(), environ), 0);
+    for (int wait = 0; wait < 300 && !fs::exists(port_file); ++wait)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    std::ifstream(port_file) >> port_;
+    EXPECT_GT(port_, 0) << "the server did not start";
+  }
+  ~Server() {
+    kill(pid_, SIGTERM);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+  }
+  std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
+
+ private:
+  pid_t pid_ = 0;
+  int port_ = 0;
+};
+
+/// A subject calibrated on walk.c3d (so that live and track run the same filter), made once.
+std::string walk_subject() {
+  static const std::string subject = [] {
+    const fs::path path = scratch("live") / "walk_subject.json";
+    const CommandResult r = run_command("calibrate " + data_file("walk.c3d") +
+                                        " --frames 150 --iterations 1 --quiet --out " + path.string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    return path.string();
+  }();
+  return subject;
+}
+
+nlohmann::json summary_of(const std::string& prefix) {
+  return nlohmann::json::parse(read_text(prefix + ".json"));
+}
+
+TEST(LiveCommand, SameJointAnglesAsTrackOnTheServedFile) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = empty_scratch("live_same");
+  const std::string subject = walk_subject();
+  const std::string tracked = (dir / "tracked").string();
+  const CommandResult track = run_command("track " + data_file("walk.c3d") + " --subject " + subject +
+                                          " --formats csv --quiet --out " + tracked);
+  ASSERT_EQ(track.status, 0) << track.output;
+  Server server(data_file("walk.c3d"), dir);
+  const std::string live = (dir / "live").string();
+  const CommandResult r = run_command("live " + server.address() + " --subject " + subject +
+                                      " --frames 300 --backlog 100000 --formats csv --quiet --out " + live);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json summary = summary_of(live);
+  ASSERT_EQ(summary["live"]["frames_dropped_busy"], 0);
+  ASSERT_EQ(summary["live"]["frames_missing"], 0);
+  EXPECT_EQ(summary["live"]["frames_received"].get<long>(), 300);
+  EXPECT_GT(summary["live"]["latency_ms"]["frames"].get<long>(), 200);
+  const auto expected = csv_rows(read_text(tracked + ".csv"));
+  const auto got = csv_rows(read_text(live + ".csv"));
+  ASSERT_EQ(got.size(), 301u);  // header and 300 frames
+  ASSERT_EQ(got[0], expected[0]);
+  double largest = 0;
+  for (std::size_t row = 1; row < got.size(); ++row) {
+    ASSERT_EQ(got[row].size(), expected[row].size());
+    for (std::size_t c = 0; c < got[row].size(); ++c) {
+      const double a = std::strtod(got[row][c].c_str(), nullptr),
+                   b = std::strtod(expected[row][c].c_str(), nullptr);
+      if (std::isnan(a) || std::isnan(b)) {
+        EXPECT_EQ(std::isnan(a), std::isnan(b)) << "row " << row << " column " << got[0][c];
+        continue;
+      }
+      largest = std::max(largest, std::abs(a - b));
+    }
+  }
+  EXPECT_LT(largest, 1e-6);
+}
+
+TEST(LiveCommand, ReconnectsAfterALostConnectionAndKeepsTheFrames) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = empty_scratch("live_reconnect");
+  Server server(data_file("walk.c3d"), dir, {"--fault-disconnect-after", "60"});
+  const std::string live = (dir / "live").string();
+  const CommandResult r = run_command("live " + server.address() + " --subject " + walk_subject() +
+                                      " --frames 200 --backlog 100000 --formats csv --out " + live);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("connection lost"), std::string::npos) << r.output;
+  const nlohmann::json summary = summary_of(live);
+  EXPECT_EQ(summary["live"]["reconnects"], 1);
+  EXPECT_EQ(summary["frames"], 200);
+  EXPECT_EQ(csv_rows(read_text(live + ".csv")).size(), 201u);
+}
+
+TEST(LiveCommand, SkippedNumbersAndChangedLabelsAreReported) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = empty_scratch("live_faults");
+  Server server(data_file("walk.c3d"), dir, {"--fault-skip-every", "10", "--fault-relabel-after", "30"});
+  const std::string live = (dir / "live").string();
+  const CommandResult r = run_command("live " + server.address() + " --subject " + walk_subject() +
+                                      " --frames 150 --backlog 100000 --formats csv --quiet --out " + live);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json summary = summary_of(live);
+  // Numbers 10, 20, ..., 150 never came; frames without markers took their places.
+  EXPECT_EQ(summary["live"]["frames_missing"], 15);
+  EXPECT_EQ(summary["live"]["frames_filled"], 15);
+  ASSERT_EQ(summary["live"]["label_changes"].size(), 1u);
+  EXPECT_EQ(summary["frames"], 150);
+}
+
+TEST(LiveCommand, MalformedPacketEndsWithAClearErrorAndKeepsTheFrames) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = empty_scratch("live_malformed");
+  Server server(data_file("walk.c3d"), dir, {"--fault-malformed-after", "120"});
+  const std::string live = (dir / "live").string();
+  const CommandResult r = run_command("live " + server.address() + " --subject " + walk_subject() +
+                                      " --backlog 100000 --formats csv --quiet --out " + live);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output,
+            "s2kf: " + server.address() +
+                ": malformed stream, connection closed: a packet declares 1048577 bytes, more than the "
+                "1048576 accepted; the 120 frames tracked until then are written\n");
+  EXPECT_EQ(csv_rows(read_text(live + ".csv")).size(), 121u);
+}
+
+TEST(LiveCommand, RefusedConnectionIsOneSentenceAndStatusOne) {
+  const fs::path dir = empty_scratch("live_refused");
+  // A port that was just free: nothing listens on it.
+  int port = 0;
+  {
+    Server server(data_file("walk.c3d"), dir);
+    port = std::stoi(server.address().substr(server.address().find(':') + 1));
+  }
+  const CommandResult r =
+      run_command("live 127.0.0.1:" + std::to_string(port) + " --out " + (dir / "x").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output, "s2kf: cannot connect to 127.0.0.1:" + std::to_string(port) + ": Connection refused\n");
+  EXPECT_FALSE(fs::exists(dir / "x.csv"));
+  const CommandResult bad = run_command("live 127.0.0.1:99999");
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_EQ(bad.output, "s2kf: the port in 127.0.0.1:99999 is not 1 to 65535\n");
+}
+
+}  // namespace
