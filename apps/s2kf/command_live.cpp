@@ -1,6 +1,7 @@
 // `s2kf live HOST[:PORT]`: track a motion capture system's stream (the QTM real-time protocol) as
 // it arrives, with the tracker `s2kf track` uses, sending every pose out over UDP as it is made,
 // and write the same files as `s2kf track` when the stream ends.
+#include "calibrated_subject.hpp"
 #include "command.hpp"
 #include "extra_outputs.hpp"
 #include "interruption.hpp"
@@ -151,6 +152,7 @@ void run_live(LiveSettings settings) {
   input.rate_hz = rate;
   input.frame_count = -1;
   track.calibration_frames = static_cast<int>(first.frame_count());
+  track.calibration_threads = every_core();  // one stream: its calibration may take every core
 
   const std::vector<std::string> columns = body::pose_column_names(body::mmm_body_model(1000).joint_names());
   std::vector<double> latency_ms;
@@ -174,7 +176,9 @@ void run_live(LiveSettings settings) {
     live["protocol"] =
         "QTM real-time " + std::to_string(live::kProtocolMajor) + "." + std::to_string(live::kProtocolMinor);
     live["rate_hz"] = rate;
-    live["end"] = source.stopped() ? std::string("stopped (signal)") : feed->ended_reason();
+    live["end"] = source.stopped()   ? std::string("stopped by a signal")
+                  : source.limited() ? std::string("--frames or --seconds reached")
+                                     : feed->ended_reason();
     live["frames_received"] = counts.received;
     live["frames_dropped_busy"] = counts.dropped;
     live["frames_missing"] = source.missing_frames();

@@ -6,9 +6,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -112,6 +115,50 @@ TEST(LiveCommand, SameJointAnglesAsTrackOnTheServedFile) {
   EXPECT_LT(largest, 1e-6);
 }
 
+TEST(LiveCommand, EveryPoseGoesOutAsAJsonLineOverUdp) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = empty_scratch("live_udp");
+  const int receiver = socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(receiver, 0);
+  const int buffer = 1 << 20;
+  setsockopt(receiver, SOL_SOCKET, SO_RCVBUF, &buffer, sizeof buffer);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(bind(receiver, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  socklen_t length = sizeof address;
+  getsockname(receiver, reinterpret_cast<sockaddr*>(&address), &length);
+  Server server(data_file("walk.c3d"), dir);
+  const std::string live = (dir / "live").string();
+  const CommandResult r =
+      run_command("live " + server.address() + " --subject " + walk_subject() +
+                  " --frames 60 --backlog 100000 --formats csv --quiet --udp-json 127.0.0.1:" +
+                  std::to_string(ntohs(address.sin_port)) + " --out " + live);
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::vector<nlohmann::json> messages;
+  char datagram[65536];
+  for (ssize_t n; (n = recv(receiver, datagram, sizeof datagram, MSG_DONTWAIT)) > 0;) {
+    ASSERT_EQ(datagram[n - 1], '\n');
+    messages.push_back(nlohmann::json::parse(std::string(datagram, static_cast<std::size_t>(n))));
+  }
+  close(receiver);
+  ASSERT_EQ(messages.size(), 60u);
+  const auto rows = csv_rows(read_text(live + ".csv"));
+  for (std::size_t f = 0; f < messages.size(); ++f) {
+    EXPECT_EQ(messages[f]["frame"], f);
+    EXPECT_NEAR(messages[f]["time"].get<double>(), 0.01 * static_cast<double>(f), 1e-9);
+    for (std::size_t c = 2; c < rows[0].size(); ++c) {
+      const nlohmann::json& value = messages[f]["pose"][rows[0][c]];
+      const double expected = std::strtod(rows[f + 1][c].c_str(), nullptr);
+      if (std::isnan(expected))
+        EXPECT_TRUE(value.is_null()) << rows[0][c];
+      else
+        EXPECT_NEAR(value.get<double>(), expected, 1e-6 * std::max(1.0, std::abs(expected))) << rows[0][c];
+    }
+  }
+  EXPECT_EQ(summary_of(live)["live"]["udp_json"]["sent"], 60);
+}
+
 TEST(LiveCommand, ReconnectsAfterALostConnectionAndKeepsTheFrames) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = empty_scratch("live_reconnect");
@@ -156,6 +203,30 @@ TEST(LiveCommand, MalformedPacketEndsWithAClearErrorAndKeepsTheFrames) {
                 ": malformed stream, connection closed: a packet declares 1048577 bytes, more than the "
                 "1048576 accepted; the 120 frames tracked until then are written\n");
   EXPECT_EQ(csv_rows(read_text(live + ".csv")).size(), 121u);
+}
+
+TEST(LiveCommand, CtrlCEndsTheStreamAndWritesTheFrames) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = empty_scratch("live_interrupt");
+  Server server(data_file("walk.c3d"), dir, {"--loop"});
+  const std::string live = (dir / "live").string();
+  std::vector<std::string> arguments{S2KF_CLI,    "live", server.address(), "--subject", walk_subject(),
+                                     "--formats", "csv",  "--quiet",        "--out",     live};
+  std::vector<char*> argv;
+  for (std::string& a : arguments) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, S2KF_CLI, nullptr, nullptr, argv.data(), environ), 0);
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  const nlohmann::json summary = summary_of(live);
+  EXPECT_EQ(summary["live"]["end"], "stopped by a signal");
+  EXPECT_GT(summary["frames"].get<long>(), 100);
+  EXPECT_EQ(csv_rows(read_text(live + ".csv")).size(), summary["frames"].get<std::size_t>() + 1);
 }
 
 TEST(LiveCommand, RefusedConnectionIsOneSentenceAndStatusOne) {

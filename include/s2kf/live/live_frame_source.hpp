@@ -77,6 +77,8 @@ class LiveFrameSource : public FrameSource {
   std::chrono::steady_clock::time_point last_arrival() const { return last_arrival_; }
   /// True when the stream ended because stop_requested said so.
   bool stopped() const { return stopped_; }
+  /// True when the stream ended at max_frames or max_seconds.
+  bool limited() const { return limited_; }
 
  private:
   bool limit_reached() const {
@@ -88,7 +90,10 @@ class LiveFrameSource : public FrameSource {
   }
 
   bool next_live(MarkerFrame& frame) {
-    if (limit_reached()) return false;
+    if (limit_reached()) {
+      limited_ = true;
+      return false;
+    }
     if (fill_ > 0) {
       --fill_;
       ++filled_;
@@ -146,6 +151,7 @@ class LiveFrameSource : public FrameSource {
   bool held_ = false;
   bool holding_ = false;
   bool stopped_ = false;
+  bool limited_ = false;
   long missing_ = 0;
   long filled_ = 0;
   LiveFrame pending_;
