@@ -159,7 +159,9 @@ void run_live(LiveSettings settings) {
   long deadline_misses = 0;
   const double period_ms = 1000.0 / rate;
   TrackHooks hooks;
+  long dropped_preparing = -1;  // frames dropped before the first row: while the session was prepared
   hooks.on_row = [&](const track::TrackedFrame& row) {
+    if (dropped_preparing < 0) dropped_preparing = feed->counts().dropped;
     if (udp) udp->send(pose_message(row, columns));
     if (row.frame == source.last_arrival_index()) {
       const double ms =
@@ -181,6 +183,7 @@ void run_live(LiveSettings settings) {
                                      : feed->ended_reason();
     live["frames_received"] = counts.received;
     live["frames_dropped_busy"] = counts.dropped;
+    live["frames_dropped_preparing"] = std::max(0L, dropped_preparing);
     live["frames_missing"] = source.missing_frames();
     live["frames_filled"] = source.filled_frames();
     live["calibration_frames"] = first.frame_count();
