@@ -93,6 +93,8 @@ const RegisterCommand serve_registration{
                          "close the connection once after N frames");
       faults->add_option("--fault-relabel-after", settings->faults.relabel_after,
                          "swap the first two labels (and their markers) after N frames");
+      faults->add_option("--fault-unlabel-after", settings->faults.unlabel_after,
+                         "stop sending the last label and its marker after N frames, unannounced");
       faults->add_option("--fault-skip-every", settings->faults.skip_every,
                          "leave out every N-th frame number");
       faults->add_option("--fault-malformed-after", settings->faults.malformed_after,

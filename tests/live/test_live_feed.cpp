@@ -144,6 +144,26 @@ TEST(LiveFeed, ChangedLabelListIsRemapped) {
       << counts.label_changes[0];
 }
 
+TEST(LiveFeed, MarkerCountChangeRereadsTheLabels) {
+  const MarkerSequence sequence = numbered_frames(40);
+  ServeOptions options;
+  options.faults.unlabel_after = 10;  // M4 goes, unannounced: frames carry 4 markers from then on
+  ServerThread server(sequence, options);
+  LiveFeed feed("127.0.0.1", server.port(), quiet_feed());
+  LiveFrameSource source(feed, {});
+  const std::vector<MarkerFrame> frames = read_all(source);
+  ASSERT_EQ(frames.size(), 40u);
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    ASSERT_EQ(frames[f].positions.cols(), 5);
+    EXPECT_EQ(frames[f].visible(4), f < 10) << f;
+    EXPECT_EQ(frames[f].positions(0, 3), 3.0);
+  }
+  const FeedCounts counts = feed.counts();
+  ASSERT_EQ(counts.label_changes.size(), 1u);
+  EXPECT_EQ(counts.label_changes[0],
+            "the label list changed (5 -> 4 labels; went: M4; came: none); markers re-mapped by label");
+}
+
 TEST(LiveFeed, LostConnectionIsReestablished) {
   const MarkerSequence sequence = numbered_frames(800, 5, 400);
   ServeOptions options;

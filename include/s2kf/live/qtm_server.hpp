@@ -29,6 +29,7 @@ struct ServeFaults {
   long relabel_after = -1;     ///< swap the first two labels, announce it with an event (once)
   long skip_every = 0;         ///< leave out every n-th frame number (0: none)
   long malformed_after = -1;   ///< send a data packet whose size lies, then close
+  long unlabel_after = -1;     ///< stop sending the last label and its marker, unannounced (once)
 };
 
 struct ServeOptions {
@@ -189,6 +190,10 @@ class QtmServer {
       frame_.visible(0) = frame_.visible(1);
       frame_.visible(1) = first;
     }
+    if (frame_.positions.cols() > static_cast<Eigen::Index>(labels_.size())) {
+      frame_.positions.conservativeResize(Eigen::NoChange, static_cast<Eigen::Index>(labels_.size()));
+      frame_.visible.conservativeResize(static_cast<Eigen::Index>(labels_.size()));
+    }
     const auto timestamp =
         static_cast<std::uint64_t>(std::llround(static_cast<double>(played) / rate_ * 1e6));
     client_.send(
@@ -226,6 +231,11 @@ class QtmServer {
         streaming_ = false;
         return;
       }
+      if (faults.unlabel_after >= 0 && frames_sent_ == faults.unlabel_after && !unlabelled_ &&
+          !labels_.empty()) {
+        unlabelled_ = true;
+        labels_.pop_back();
+      }
       if (faults.relabel_after >= 0 && frames_sent_ == faults.relabel_after && !relabelled_ &&
           labels_.size() >= 2) {
         relabelled_ = true;
@@ -247,6 +257,7 @@ class QtmServer {
   bool finished_ = false;
   bool disconnected_ = false;
   bool relabelled_ = false;
+  bool unlabelled_ = false;
   Clock::time_point start_;
   long next_frame_ = 0;
   long frames_sent_ = 0;
