@@ -153,10 +153,13 @@ class LiveFeed {
     for (const std::string& label : current_labels_)
       if (std::find(previous.begin(), previous.end(), label) == previous.end())
         came += (came.empty() ? "" : ", ") + label;
-    const std::string change = "the label list changed (" + std::to_string(previous.size()) + " -> " +
-                               std::to_string(current_labels_.size()) +
-                               " labels; went: " + (went.empty() ? "none" : went) +
-                               "; came: " + (came.empty() ? "none" : came) + "); markers re-mapped by label";
+    const std::string change =
+        went.empty() && came.empty()
+            ? std::string("the label list changed its order; markers re-mapped by label")
+            : "the label list changed (" + std::to_string(previous.size()) + " -> " +
+                  std::to_string(current_labels_.size()) +
+                  " labels; went: " + (went.empty() ? "none" : went) +
+                  "; came: " + (came.empty() ? "none" : came) + "); markers re-mapped by label";
     say(change);
     std::lock_guard<std::mutex> lock(mutex_);
     counts_.label_changes.push_back(change);
