@@ -154,7 +154,9 @@ void run_live(LiveSettings settings) {
   track.calibration_frames = static_cast<int>(first.frame_count());
   track.calibration_threads = every_core();  // one stream: its calibration may take every core
 
-  const std::vector<std::string> columns = body::pose_column_names(body::mmm_body_model(1000).joint_names());
+  // The row's values are the pose columns after frame and time.
+  std::vector<std::string> columns = body::pose_column_names(body::mmm_body_model(1000).joint_names());
+  columns.erase(columns.begin(), columns.begin() + 2);
   std::vector<double> latency_ms;
   long deadline_misses = 0;
   const double period_ms = 1000.0 / rate;

@@ -175,7 +175,7 @@ TEST(LiveFeed, LostConnectionIsReestablished) {
   EXPECT_FALSE(feed.failed()) << feed.ended_reason();
   EXPECT_EQ(feed.ended_reason(), "the server has no more data");
   // The frames sent while reconnecting are missing, filled in (up to a second, 400 frames).
-  EXPECT_GT(feed.counts().received, 20);
+  EXPECT_GE(feed.counts().received, 20);
   EXPECT_EQ(static_cast<long>(frames.size()), feed.counts().received + source.filled_frames());
   EXPECT_EQ(source.filled_frames(), source.missing_frames());
   EXPECT_EQ(frames.back().positions(1, 0), static_cast<double>(frames.size() - 1));
@@ -183,7 +183,9 @@ TEST(LiveFeed, LostConnectionIsReestablished) {
 
 TEST(LiveFeed, GivesUpWhenTheServerIsGone) {
   const MarkerSequence sequence = numbered_frames(400, 5, 400);
-  auto server = std::make_unique<ServerThread>(sequence, ServeOptions{});
+  ServeOptions looped;
+  looped.loop = true;  // it never ends by itself, however slowly the test runs
+  auto server = std::make_unique<ServerThread>(sequence, looped);
   FeedOptions options = quiet_feed();
   options.reconnect_seconds = 0.3;
   LiveFeed feed("127.0.0.1", server->port(), options);
