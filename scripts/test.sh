@@ -18,8 +18,9 @@ fuzz_seconds=${S2KF_FUZZ_SECONDS:-5}
 if [ "${1:-}" = "--sanitize" ]; then
   fuzz_seconds=${S2KF_FUZZ_SECONDS:-20}
   # The consumer test builds an outside project against the installed package: nothing in it
-  # runs under the sanitizers, and the release pass has already run it.
-  skip=(-E consumer_find_package)
+  # runs under the sanitizers, and the release pass has already run it. The Slurm job array
+  # (tests/tools) tests the batch recipe, which the release pass has run.
+  skip=(-E 'consumer_find_package|slurm_job_array')
   build=build-sanitize
   # -O1: sanitizer builds compile much faster than at -O2/-g and still run the suite quickly.
   # Portable (no -march=native): the memory checks concern this code, not the instruction set, and
@@ -28,11 +29,16 @@ if [ "${1:-}" = "--sanitize" ]; then
          -DS2KF_BUILD_BENCHMARKS=OFF "${unity[@]}")
 fi
 # Beyond the build packages, the tests use: pybind11 and numpy/pytest (the Python module), xmllint
-# (the OpenSim model's well-formedness), blender (the BVH import test), chromium (the viewer test)
-# and python3-venv for the test environment of PyPI packages (OpenSim, biorbd: tests/tools).
+# (the OpenSim model's well-formedness), blender (the BVH import test), chromium (the viewer test),
+# python3-venv for the test environment of PyPI packages (OpenSim, biorbd, ezc3d: tests/tools,
+# python/tests), and slurm-wlm and munge (the Slurm job array of docs/batch.md, on a one-node cluster
+# the test starts).
 scripts/install-deps.sh pybind11-dev python3-dev python3-numpy python3-pytest libxml2-utils blender chromium \
-  python3-venv
-test_python=$(realpath "$(scripts/python-env.sh)")
+  python3-venv slurm-wlm munge
+# Absolute but not resolved: the venv's python is a symlink to the system's, and only the venv's
+# own path makes Python use the venv's packages.
+test_python=$(scripts/python-env.sh)
+case $test_python in /*) ;; *) test_python=$PWD/$test_python ;; esac
 jobs=$(nproc 2>/dev/null || echo 2)
 # Ninja lets every target's files compile while the libraries they link are still being built
 # (Make waits for them, and one core idles during the compiled library's two minutes). A build
