@@ -1,10 +1,15 @@
 /// @file
 /// Where the module finds the bundled data (marker sets, motions): $S2KF_DATA_DIR, else the
-/// source tree's data/ compiled in, the same rule the command-line program follows.
+/// source tree's data/ compiled in, the same rule the command-line program follows. An installed
+/// module (a wheel from `pip install .`) carries its data in s2kf_data/ beside it, which
+/// use_installed_data() makes the default.
 #pragma once
+
+#include <dlfcn.h>
 
 #include <cstdlib>
 #include <filesystem>
+#include <system_error>
 
 namespace s2kf::python {
 
@@ -12,6 +17,21 @@ inline std::filesystem::path data_directory() {
   if (const char* from_environment = std::getenv("S2KF_DATA_DIR"); from_environment && *from_environment)
     return from_environment;
   return S2KF_DATA_DIR;
+}
+
+/// Sets $S2KF_DATA_DIR to the s2kf_data/ folder beside this module's shared object when that folder
+/// exists and the variable is unset: the module's C++ code (marker sets, motions) reads the variable,
+/// and a wheel cannot know at compile time where it will be installed.
+inline void use_installed_data() {
+  if (const char* set = std::getenv("S2KF_DATA_DIR"); set && *set) return;
+  Dl_info self{};
+  if (dladdr(reinterpret_cast<const void*>(&use_installed_data), &self) == 0 || self.dli_fname == nullptr)
+    return;
+  std::error_code error;
+  const std::filesystem::path beside =
+      std::filesystem::absolute(self.dli_fname, error).parent_path() / "s2kf_data";
+  if (!error && std::filesystem::is_directory(beside / "markersets", error))
+    setenv("S2KF_DATA_DIR", beside.c_str(), 0);
 }
 
 }  // namespace s2kf::python

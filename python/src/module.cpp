@@ -2,6 +2,7 @@
 /// The s2kf Python module: numpy in and out, the GIL released while C++ runs, and C++ errors as
 /// Python exceptions with the library's own one-sentence messages.
 #include "bindings.hpp"
+#include "data_directory.hpp"
 
 #include <s2kf/core/error.hpp>
 #include <s2kf/io/c3d_error.hpp>
@@ -17,6 +18,7 @@ PYBIND11_MODULE(s2kf, module) {
       "Smart Sampling Kalman Filter whole-body motion tracking from optical motion capture "
       "(C3D in, root pose and 40 joint angles per frame out). See docs/python.md.";
   module.attr("__version__") = S2KF_VERSION;
+  s2kf::python::use_installed_data();
 
   // pybind11 already maps std::invalid_argument (DimensionError included) to ValueError and
   // std::runtime_error to RuntimeError. A C3D file that cannot be opened or read is an OSError, as
