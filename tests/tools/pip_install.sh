@@ -51,6 +51,7 @@ labels, rate, points = s2kf.simulate("walk", frames=40, seed=3)
 result = s2kf.track(points, labels, rate, markerset="plugin_gait", calibrate=False, samples=101)
 assert result.summary["marker_set"] == "plugin_gait", result.summary["marker_set"]
 assert result.joints.shape == (40, 40)
-print(f"s2kf {s2kf.__version__} from {where.parent}: {len(installed)} files installed, "
-      f"{len(motions)} motions; tracked 40 frames with plugin_gait")
+import numpy
+print(f"s2kf {s2kf.__version__} from {where.parent} (numpy {numpy.__version__}): {len(installed)} files "
+      f"installed, {len(motions)} motions; tracked 40 frames with plugin_gait")
 PY
