@@ -10,7 +10,7 @@ build=build
 # the template instantiations those headers bring (docs/architecture.md, "Compile time"). A build
 # for editing one file at a time is quicker without: configure it yourself, as in the README.
 unity=(-DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=16)
-flags=(-DCMAKE_BUILD_TYPE=Release "${unity[@]}")
+flags=(-DCMAKE_BUILD_TYPE=Release -DS2KF_WERROR=ON "${unity[@]}")
 skip=()
 # The C3D mutation test (C3dFuzz) runs for a bounded time: 5 s here, 20 s under the sanitizers,
 # where a mutation that reads out of bounds is caught; S2KF_FUZZ_SECONDS sets both.
@@ -25,7 +25,7 @@ if [ "${1:-}" = "--sanitize" ]; then
   # -O1: sanitizer builds compile much faster than at -O2/-g and still run the suite quickly.
   # Portable (no -march=native): the memory checks concern this code, not the instruction set, and
   # GCC's AVX-512 intrinsics would bury its warnings in false positives.
-  flags=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE=-O1 -DS2KF_SANITIZE=ON -DS2KF_NATIVE=OFF
+  flags=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE=-O1 -DS2KF_SANITIZE=ON -DS2KF_NATIVE=OFF -DS2KF_WERROR=ON
          -DS2KF_BUILD_BENCHMARKS=OFF "${unity[@]}")
 fi
 # Beyond the build packages, the tests use: pybind11 and numpy/pytest (the Python module), xmllint
