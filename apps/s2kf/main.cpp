@@ -2,6 +2,8 @@
 #include "command.hpp"
 #include "interruption.hpp"
 
+#include <s2kf/core/instruction_set.hpp>
+
 #include <algorithm>
 #include <cstdio>
 #include <exception>
@@ -30,7 +32,9 @@ int main(int argc, char** argv) {
   CLI::App app{
       "s2kf: whole-body motion tracking from optical motion capture with the Smart Sampling "
       "Kalman Filter"};
-  app.set_version_flag("--version", std::string("s2kf ") + S2KF_VERSION);
+  // The version and the kernel variant the processor runs (core/instruction_set.hpp).
+  app.set_version_flag(
+      "--version", [] { return std::string("s2kf ") + S2KF_VERSION + ", " + s2kf::instruction_set_text(); });
   app.require_subcommand(1);
   auto commands = s2kf::cli::registered_commands();
   std::sort(commands.begin(), commands.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
@@ -48,6 +52,7 @@ int main(int argc, char** argv) {
   }
   s2kf::cli::install_interrupt_handlers();
   try {
+    s2kf::active_instruction_set();  // a wrong S2KF_SIMD is an error before any work
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
     return app.exit(e);  // --help, --version

@@ -14,6 +14,7 @@
 #include "viewer/result_page.hpp"  // --html
 
 #include <s2kf/body/pose.hpp>
+#include <s2kf/core/instruction_set.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_error.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>
@@ -300,7 +301,7 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
     paragraph << "\nSeconds per stage:";
     for (const auto& [stage, seconds] : track::stage_list(times))
       paragraph << " " << stage << " " << fixed_text(seconds, 3) << (stage == "writing" ? "" : ",");
-    paragraph << " (" << fixed_text(times.sum(), 3) << " in all).";
+    paragraph << " (" << fixed_text(times.sum(), 3) << " in all), " << instruction_set_text() << ".";
   }
   return {summary, paragraph.str()};
 }

@@ -6,6 +6,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
+#include <s2kf/core/instruction_set.hpp>
 
 #include <Eigen/Core>
 
@@ -29,7 +30,7 @@ namespace s2kf::body {
 /// rounding never leaves the range (NaN passes through). Every user of the map calls this one
 /// function (the batched measurement model with sines it computed in bulk).
 template <typename Scalar>
-Scalar bounded_angle_from_sine(Scalar sine, Scalar lower, Scalar upper) {
+S2KF_ALWAYS_INLINE Scalar bounded_angle_from_sine(Scalar sine, Scalar lower, Scalar upper) {
   if (upper == lower) return lower;
   const Scalar half(0.5);
   const Scalar v = half * (upper - lower) * sine + half * (upper + lower);

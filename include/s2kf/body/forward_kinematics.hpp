@@ -9,6 +9,7 @@
 #include <s2kf/body/vector_sincos.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
+#include <s2kf/core/instruction_set.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -128,54 +129,69 @@ using ForwardKinematicsWorkspace = BasicForwardKinematicsWorkspace<double>;
 
 /// Runs forward kinematics on the first n (<= kBlock) poses staged in `ws` (root_position,
 /// root_rotation, sin_q, cos_q) and writes ws.markers for the markers listed in `marker_indices`
-/// (in that order). `ws.prepare(model, marker_indices.size())` must have been called.
+/// (in that order). `ws.prepare(model, marker_indices.size())` must have been called. Plain loops
+/// over the poses, always inlined, so that a caller compiled for another instruction set
+/// (core/instruction_set.hpp) vectorises them with its own registers.
 template <typename Scalar>
-void forward_kinematics_block(const BodyModel& model, const std::vector<int>& marker_indices,
-                              BasicForwardKinematicsWorkspace<Scalar>& ws, Eigen::Index n) {
-  using Array = Eigen::Map<Eigen::Array<Scalar, Eigen::Dynamic, 1>>;
-  using ConstArray = Eigen::Map<const Eigen::Array<Scalar, Eigen::Dynamic, 1>>;
+S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
+                                                 const std::vector<int>& marker_indices,
+                                                 BasicForwardKinematicsWorkspace<Scalar>& ws,
+                                                 Eigen::Index n) {
   auto rotation = [&](int frame, int r, int c) { return ws.array(ws.rotation, 9 * frame + 3 * c + r); };
   auto origin = [&](int frame, int r) { return ws.array(ws.origin, 3 * ws.origin_frame[frame] + r); };
+  // out = base + R(frame) t (row r), skipping the zero components of t (most joints translate, and
+  // most markers sit, along one or two axes); one pass, no copy of `base` first.
+  const auto offset = [&](Scalar* __restrict out, const Scalar* __restrict base, int frame, int r,
+                          const Eigen::Vector3d& t) S2KF_ALWAYS_INLINE_LAMBDA {
+    Scalar scale[3];
+    const Scalar* column[3];
+    int terms = 0;
+    for (int c = 0; c < 3; ++c)
+      if (t(c) != 0) {
+        scale[terms] = static_cast<Scalar>(t(c));
+        column[terms++] = rotation(frame, r, c);
+      }
+    const Scalar* __restrict a = column[0], * __restrict b = column[1], * __restrict d = column[2];
+    const Scalar ta = scale[0], tb = scale[1], td = scale[2];
+    if (terms == 0)
+      for (Eigen::Index i = 0; i < n; ++i) out[i] = base[i];
+    else if (terms == 1)
+      for (Eigen::Index i = 0; i < n; ++i) out[i] = base[i] + ta * a[i];
+    else if (terms == 2)
+      for (Eigen::Index i = 0; i < n; ++i) out[i] = (base[i] + ta * a[i]) + tb * b[i];
+    else
+      for (Eigen::Index i = 0; i < n; ++i) out[i] = ((base[i] + ta * a[i]) + tb * b[i]) + td * d[i];
+  };
 
-  for (int k = 0; k < 9; ++k)
-    Array(ws.array(ws.rotation, k), n) = ConstArray(ws.array(ws.root_rotation, k), n);
-  for (int r = 0; r < 3; ++r) Array(origin(0, r), n) = ConstArray(ws.array(ws.root_position, r), n);
+  for (int k = 0; k < 9; ++k) std::copy_n(ws.array(ws.root_rotation, k), n, ws.array(ws.rotation, k));
+  for (int r = 0; r < 3; ++r) std::copy_n(ws.array(ws.root_position, r), n, origin(0, r));
 
   for (int j = 0; j < model.joint_count(); ++j) {
     const Joint& joint = model.joints[j];
     const int p = joint.parent_frame, f = j + 1;
-    if (ws.origin_frame[f] == f) {
-      // o_f = o_p + R_p t, skipping the zero components of t (most joints translate along one axis).
-      for (int r = 0; r < 3; ++r) {
-        Array out(origin(f, r), n);
-        out = ConstArray(origin(p, r), n);
-        for (int c = 0; c < 3; ++c)
-          if (joint.translation(c) != 0)
-            out += static_cast<Scalar>(joint.translation(c)) * ConstArray(rotation(p, r, c), n);
-      }
-    }
+    if (ws.origin_frame[f] == f)  // o_f = o_p + R_p t
+      for (int r = 0; r < 3; ++r) offset(origin(f, r), origin(p, r), p, r, joint.translation);
     // R_f = R_p * R_axis(q): the axis column is copied, the other two turn by q in their plane.
     const int a = static_cast<int>(joint.axis);
     const int u = (a + 1) % 3, v = (a + 2) % 3;  // (y, z) for x, (z, x) for y, (x, y) for z
-    const ConstArray s(ws.array(ws.sin_q, j), n), c(ws.array(ws.cos_q, j), n);
+    const Scalar* __restrict s = ws.array(ws.sin_q, j);
+    const Scalar* __restrict c = ws.array(ws.cos_q, j);
     for (int r = 0; r < 3; ++r) {
-      const ConstArray pu(rotation(p, r, u), n), pv(rotation(p, r, v), n);
-      Array(rotation(f, r, a), n) = ConstArray(rotation(p, r, a), n);
-      Array(rotation(f, r, u), n) = c * pu + s * pv;
-      Array(rotation(f, r, v), n) = c * pv - s * pu;
+      const Scalar* __restrict pa = rotation(p, r, a), * __restrict pu = rotation(p, r, u), * __restrict pv = rotation(p, r, v);
+      Scalar* __restrict fa = rotation(f, r, a), * __restrict fu = rotation(f, r, u), * __restrict fv = rotation(f, r, v);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        fa[i] = pa[i];
+        fu[i] = c[i] * pu[i] + s[i] * pv[i];
+        fv[i] = c[i] * pv[i] - s[i] * pu[i];
+      }
     }
   }
 
   for (std::size_t k = 0; k < marker_indices.size(); ++k) {
     const Marker& marker = model.markers[marker_indices[k]];
-    const int f = marker.frame;
-    for (int r = 0; r < 3; ++r) {
-      Array out(ws.array(ws.markers, 3 * static_cast<Eigen::Index>(k) + r), n);
-      out = ConstArray(origin(f, r), n);
-      for (int c = 0; c < 3; ++c)
-        if (marker.offset(c) != 0)
-          out += static_cast<Scalar>(marker.offset(c)) * ConstArray(rotation(f, r, c), n);
-    }
+    for (int r = 0; r < 3; ++r)
+      offset(ws.array(ws.markers, 3 * static_cast<Eigen::Index>(k) + r), origin(marker.frame, r),
+             marker.frame, r, marker.offset);
   }
 }
 
@@ -183,18 +199,23 @@ void forward_kinematics_block(const BodyModel& model, const std::vector<int>& ma
 /// of a block. A transpose: eight rows at a time, so the source arrays and the destination
 /// columns in use stay in the L1 cache (row by row, or column by column, they do not).
 template <typename Scalar>
-void copy_markers_out(const BasicForwardKinematicsWorkspace<Scalar>& ws, Eigen::Index n,
-                      Eigen::Ref<Eigen::MatrixXd> markers) {
+S2KF_ALWAYS_INLINE void copy_markers_out(const BasicForwardKinematicsWorkspace<Scalar>& ws, Eigen::Index n,
+                                         double* markers, Eigen::Index rows, Eigen::Index stride) {
   constexpr Eigen::Index S = BasicForwardKinematicsWorkspace<Scalar>::kStride, kRows = 8;
-  const Eigen::Index rows = markers.rows();
   const Scalar* from = ws.markers.data();
   for (Eigen::Index top = 0; top < rows; top += kRows) {
     const Eigen::Index r = std::min(kRows, rows - top);
     for (Eigen::Index i = 0; i < n; ++i) {
-      double* to = markers.col(i).data() + top;
+      double* to = markers + i * stride + top;
       for (Eigen::Index k = 0; k < r; ++k) to[k] = from[(top + k) * S + i];
     }
   }
+}
+
+template <typename Scalar>
+void copy_markers_out(const BasicForwardKinematicsWorkspace<Scalar>& ws, Eigen::Index n,
+                      Eigen::Ref<Eigen::MatrixXd> markers) {
+  copy_markers_out(ws, n, markers.data(), markers.rows(), markers.outerStride());
 }
 
 /// Batched forward kinematics of L poses: root_positions (3 x L, mm), root_rotations (9 x L, the

@@ -11,6 +11,7 @@
 #include <s2kf/body/vector_sincos.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/error.hpp>
+#include <s2kf/core/instruction_set.hpp>
 
 #include <Eigen/Core>
 
@@ -110,21 +111,28 @@ class MarkerMeasurementModel {
     ws.prepare(model_, static_cast<Eigen::Index>(selected_.size()));
     if (orientation.size() != static_cast<std::size_t>(9 * S)) orientation.assign(9 * S, Scalar(0));
     const Eigen::Index B = ForwardKinematicsWorkspace::block_size(count);
+    eigen_assert(states.innerStride() == 1 && predictions.innerStride() == 1);
+    const InstructionSet set = active_instruction_set();
     for (Eigen::Index start = 0; start < count; start += B) {
       const Eigen::Index n = std::min(B, count - start);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        for (int r = 0; r < 3; ++r) ws.root_position[r * S + i] = static_cast<Scalar>(states(r, start + i));
-        for (int k = 0; k < 3; ++k) orientation[k * S + i] = static_cast<Scalar>(states(3 + k, start + i));
-        for (int j = 0; j < joint_count; ++j)
-          ws.angles[j * S + i] = static_cast<Scalar>(states(6 + j, start + i));
-      }
-      if (orientation_ == OrientationParameterization::roll_pitch_yaw)
-        stage_rpy_rotations(n, ws, orientation.data());
-      else
-        stage_local_rotations(n, ws, orientation.data());
-      stage_joint_angles(n, ws);
-      forward_kinematics_block(model_, selected_, ws, n);
-      copy_markers_out(ws, n, predictions.middleCols(start, n));
+      // The whole block in one function compiled for the active instruction set: every stage below
+      // is a plain loop over the poses, inlined into it.
+      run_with_instruction_set(set, [&](auto) S2KF_ALWAYS_INLINE_LAMBDA {
+        const double* in = states.data() + start * states.outerStride();
+        for (Eigen::Index i = 0; i < n; ++i, in += states.outerStride()) {
+          for (int r = 0; r < 3; ++r) ws.root_position[r * S + i] = static_cast<Scalar>(in[r]);
+          for (int k = 0; k < 3; ++k) orientation[k * S + i] = static_cast<Scalar>(in[3 + k]);
+          for (int j = 0; j < joint_count; ++j) ws.angles[j * S + i] = static_cast<Scalar>(in[6 + j]);
+        }
+        if (orientation_ == OrientationParameterization::roll_pitch_yaw)
+          stage_rpy_rotations(n, ws, orientation.data());
+        else
+          stage_local_rotations(n, ws, orientation.data());
+        stage_joint_angles(n, ws);
+        forward_kinematics_block(model_, selected_, ws, n);
+        copy_markers_out(ws, n, predictions.data() + start * predictions.outerStride(), predictions.rows(),
+                         predictions.outerStride());
+      });
     }
   }
 
@@ -136,7 +144,8 @@ class MarkerMeasurementModel {
 
   // orientation_buffer_ holds roll, pitch, yaw in arrays 0..2; arrays 3..8 receive sines and cosines.
   template <typename Scalar>
-  void stage_rpy_rotations(Eigen::Index n, BasicForwardKinematicsWorkspace<Scalar>& ws, Scalar* o) {
+  S2KF_ALWAYS_INLINE void stage_rpy_rotations(Eigen::Index n, BasicForwardKinematicsWorkspace<Scalar>& ws,
+                                              Scalar* o) {
     for (int k = 0; k < 3; ++k) vector_sincos(o + k * S, o + (3 + k) * S, o + (6 + k) * S, n);
     const Scalar *sr = o + 3 * S, *sp = o + 4 * S, *sy = o + 5 * S;
     const Scalar *cr = o + 6 * S, *cp = o + 7 * S, *cy = o + 8 * S;
@@ -157,7 +166,8 @@ class MarkerMeasurementModel {
   // R = R_ref Exp(delta), Exp(delta) = I + a K + b K^2 with K = [delta]x, a = sin t / t,
   // b = (1 - cos t) / t^2 (series below t = 1e-4, where both are exact to rounding).
   template <typename Scalar>
-  void stage_local_rotations(Eigen::Index n, BasicForwardKinematicsWorkspace<Scalar>& ws, Scalar* o) {
+  S2KF_ALWAYS_INLINE void stage_local_rotations(Eigen::Index n, BasicForwardKinematicsWorkspace<Scalar>& ws,
+                                                Scalar* o) {
     const Scalar *dx = o, *dy = o + S, *dz = o + 2 * S;
     Scalar *t = o + 3 * S, *st = o + 4 * S, *ct = o + 5 * S;
     for (Eigen::Index i = 0; i < n; ++i) t[i] = std::sqrt(dx[i] * dx[i] + dy[i] * dy[i] + dz[i] * dz[i]);
@@ -196,7 +206,7 @@ class MarkerMeasurementModel {
 
   // theta = bounded_angle_from_sine(sin Theta) per sample, then sin and cos of theta.
   template <typename Scalar>
-  void stage_joint_angles(Eigen::Index n, BasicForwardKinematicsWorkspace<Scalar>& ws) {
+  S2KF_ALWAYS_INLINE void stage_joint_angles(Eigen::Index n, BasicForwardKinematicsWorkspace<Scalar>& ws) {
     for (int j = 0; j < model_.joint_count(); ++j) {
       Scalar* q = ws.array(ws.angles, j);
       Scalar* s = ws.array(ws.sin_q, j);

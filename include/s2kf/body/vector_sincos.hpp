@@ -1,7 +1,11 @@
 /// @file
 /// Sine and cosine of a whole array at once, in loops the compiler vectorises (std::sin and
-/// std::cos are scalar library calls and would dominate batched forward kinematics).
+/// std::cos are scalar library calls and would dominate batched forward kinematics). Always
+/// inlined, so that code compiled for another instruction set (core/instruction_set.hpp) vectorises
+/// them with its own registers.
 #pragma once
+
+#include <s2kf/core/instruction_set.hpp>
 
 #include <Eigen/Core>
 
@@ -13,7 +17,7 @@ namespace s2kf::body {
 /// and std::cos. Arguments with |x| <= 1e5 take the vectorised path (fdlibm's polynomials after a
 /// three-part Cody-Waite reduction by pi/2, exact for these magnitudes); larger or non-finite
 /// arguments fall back to std::sin/std::cos, so NaN and infinity give NaN exactly as there.
-inline void vector_sincos(const double* x, double* s, double* c, Eigen::Index n) {
+S2KF_ALWAYS_INLINE void vector_sincos(const double* x, double* s, double* c, Eigen::Index n) {
   constexpr double kTwoOverPi = 6.36619772367581382433e-01;
   constexpr double kPio2Part1 = 1.57079632673412561417e+00;  // first 33 bits of pi/2
   constexpr double kPio2Part2 = 6.07710050630396597660e-11;  // next 33 bits
@@ -58,7 +62,7 @@ inline void vector_sincos(const double* x, double* s, double* c, Eigen::Index n)
 /// The single-precision version (the tracker's single-precision sample pipeline): Cephes' sinf and
 /// cosf polynomials after a three-part reduction by pi/2 (exact for |x| <= 8192), within about two
 /// units in the last place of float; larger or non-finite arguments take std::sin/std::cos.
-inline void vector_sincos(const float* x, float* s, float* c, Eigen::Index n) {
+S2KF_ALWAYS_INLINE void vector_sincos(const float* x, float* s, float* c, Eigen::Index n) {
   constexpr float kTwoOverPi = 0.636619772367581f;
   constexpr float kPio2Part1 = 1.5703125f;                // 8 bits: k * part1 is exact
   constexpr float kPio2Part2 = 4.837512969970703125e-4f;  // next bits
