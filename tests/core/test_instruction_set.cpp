@@ -1,8 +1,8 @@
 #include <s2kf/core/instruction_set.hpp>
 #include <s2kf/core/product_tiles.hpp>
-#include <s2kf/core/sample_cache.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/track/marker_mapping.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <gtest/gtest.h>
@@ -101,7 +101,7 @@ TEST(InstructionSet, TrackingGivesTheSamePosesWithEveryVariant) {
   std::vector<Eigen::MatrixXd> poses;  // per variant: 6 + 40 rows, one column per frame
   for (InstructionSet set : runnable_sets()) {
     s2kf::use_instruction_set(set);
-    s2kf::track::Tracker tracker(model, s2kf::track::map_markers(labels, model.marker_names()), options,
+    s2kf::track::Tracker tracker(model, s2kf::body::map_markers(labels, model.marker_names()), options,
                                  recording.info.rate, samples);
     Eigen::MatrixXd pose(6 + model.joint_count(), frames);
     for (Eigen::Index f = 0; f < frames; ++f) {
