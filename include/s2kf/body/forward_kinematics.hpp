@@ -143,8 +143,8 @@ S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
   // most markers sit, along one or two axes); one pass, no copy of `base` first.
   const auto offset = [&](Scalar* __restrict out, const Scalar* __restrict base, int frame, int r,
                           const Eigen::Vector3d& t) S2KF_ALWAYS_INLINE_LAMBDA {
-    Scalar scale[3];
-    const Scalar* column[3];
+    Scalar scale[3] = {0, 0, 0};  // unused entries: a zero times the base (never read as data)
+    const Scalar* column[3] = {base, base, base};
     int terms = 0;
     for (int c = 0; c < 3; ++c)
       if (t(c) != 0) {
