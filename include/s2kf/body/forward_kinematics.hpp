@@ -143,16 +143,26 @@ S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
   // most markers sit, along one or two axes); one pass, no copy of `base` first.
   const auto offset = [&](Scalar* __restrict out, const Scalar* __restrict base, int frame, int r,
                           const Eigen::Vector3d& t) S2KF_ALWAYS_INLINE_LAMBDA {
-    Scalar scale[3] = {0, 0, 0};  // unused entries: a zero times the base (never read as data)
-    const Scalar* column[3] = {base, base, base};
+    // The nonzero components of t in order (ta, a), (tb, b), (td, d); the rest are never used.
     int terms = 0;
-    for (int c = 0; c < 3; ++c)
-      if (t(c) != 0) {
-        scale[terms] = static_cast<Scalar>(t(c));
-        column[terms++] = rotation(frame, r, c);
+    Scalar ta = 0, tb = 0, td = 0;
+    const Scalar* __restrict a = base, * __restrict b = base, * __restrict d = base;
+    for (int c = 0; c < 3; ++c) {
+      if (t(c) == 0) continue;
+      const auto value = static_cast<Scalar>(t(c));
+      const Scalar* column = rotation(frame, r, c);
+      if (terms == 0) {
+        ta = value;
+        a = column;
+      } else if (terms == 1) {
+        tb = value;
+        b = column;
+      } else {
+        td = value;
+        d = column;
       }
-    const Scalar* __restrict a = column[0], * __restrict b = column[1], * __restrict d = column[2];
-    const Scalar ta = scale[0], tb = scale[1], td = scale[2];
+      ++terms;
+    }
     if (terms == 0)
       for (Eigen::Index i = 0; i < n; ++i) out[i] = base[i];
     else if (terms == 1)
