@@ -39,6 +39,9 @@ scripts/install-deps.sh pybind11-dev python3-dev python3-numpy python3-pytest li
 # own path makes Python use the venv's packages.
 test_python=$(scripts/python-env.sh)
 case $test_python in /*) ;; *) test_python=$PWD/$test_python ;; esac
+# The module is built with the environment's pybind11 (PyPI, 2.12 or newer): its tests run with the
+# environment's NumPy 2 (which the PyPI peers bring), which Debian's pybind11 2.10 misreads.
+flags+=("-Dpybind11_DIR=$("$test_python" -m pybind11 --cmakedir)")
 jobs=$(nproc 2>/dev/null || echo 2)
 # Ninja lets every target's files compile while the libraries they link are still being built
 # (Make waits for them, and one core idles during the compiled library's two minutes). A build
