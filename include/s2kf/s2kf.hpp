@@ -11,6 +11,7 @@
 #include <s2kf/core/error.hpp>
 #include <s2kf/core/exponential_integral.hpp>
 #include <s2kf/core/gaussian.hpp>
+#include <s2kf/core/instruction_set.hpp>
 #include <s2kf/core/lcd_distance.hpp>
 #include <s2kf/core/lcd_sample_set.hpp>
 #include <s2kf/core/marginal_update.hpp>
