@@ -3,14 +3,14 @@
 // the labels, calibration unless 0), with the tracker's motion model and noise levels given on the
 // command line; prints the accuracy against the truth after 20 frames (and the true-subject
 // reference when asked). Not built by CMake; build it from the repository root with
-//   g++ -O2 -DNDEBUG -std=c++17 -Iinclude -Iapps/s2kf -isystem /usr/include/eigen3 \
-//     -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp apps/s2kf/tracker_samples.cpp -o
-//     accuracy-tune
+//   g++ -O2 -DNDEBUG -std=c++17 -Iinclude -isystem /usr/include/eigen3 \
+//     -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp src/app/sample_sets.cpp src/app/marker_set_json.cpp \
+//     src/app/data_directory.cpp -o accuracy-tune
 // or, faster, against the compiled library (`cmake --build build --target s2kf_compiled`; the same
 // -march=native as that library, or Eigen's objects differ in layout and the program crashes):
-//   g++ -O2 -march=native -DNDEBUG -std=c++17 -DS2KF_COMPILED -Iinclude -Iapps/s2kf \
+//   g++ -O2 -march=native -DNDEBUG -std=c++17 -DS2KF_COMPILED -Iinclude \
 //     -isystem /usr/include/eigen3 -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp \
-//     apps/s2kf/tracker_samples.cpp build/libs2kf_compiled.a -lpthread -o build/accuracy-tune
+//     src/app/sample_sets.cpp src/app/marker_set_json.cpp src/app/data_directory.cpp build/libs2kf_compiled.a -lpthread -o build/accuracy-tune
 // Usage: accuracy-tune MOTION SEED OCCLUSION(0|1) SMOOTH(0|1) CALIBRATE(0|1) rw|cv
 //          [POSITION_ACC ORIENTATION_ACC JOINT_ACC POSITION_SPEED ORIENTATION_SPEED JOINT_SPEED
 //           REFERENCE(0|1) [INITIAL_RATE_SDS x3]]
@@ -31,9 +31,9 @@
 #include <s2kf/evaluation/true_subject_reference.hpp>
 #include <s2kf/evaluation/truth_metrics.hpp>
 #include <string>
-#include "marker_set_json.hpp"
-#include "motion_json.hpp"
-#include "tracker_samples.hpp"
+#include <s2kf/app/marker_set_json.hpp>
+#include <s2kf/app/motion_json.hpp>
+#include <s2kf/app/sample_sets.hpp>
 using namespace s2kf;
 int main(int argc, char** argv) {
   // usage: tune motion seed occlusion(0/1) smooth(0/1) calibrate(0/1) model(rw/cv) pa oa ja ps os js ref(0/1)
@@ -43,9 +43,9 @@ int main(int argc, char** argv) {
   sim::SubjectOptions so;
   if (const char* v = std::getenv("SOFT_TISSUE")) so.soft_tissue_mm = std::atof(v);
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(so.height_mm), so, seed);
-  cli::JointTable joints{subject.joint_names, subject.lower, subject.upper};
+  app::JointTable joints{subject.joint_names, subject.lower, subject.upper};
   const auto motion =
-      cli::load_motion_file(std::string(S2KF_DATA_DIR) + "/motions/" + motion_name + ".json", joints, seed);
+      app::load_motion_file(std::string(S2KF_DATA_DIR) + "/motions/" + motion_name + ".json", joints, seed);
   sim::RecordingOptions ro;
   if (occl) ro.occlusion = {sim::kPaperOcclusionProbability, sim::kPaperOcclusionMeanFrames};
   const sim::Recording rec = sim::simulate_recording(motion, subject, ro, seed);
@@ -76,8 +76,8 @@ int main(int argc, char** argv) {
     opt.tracker.initial_joint_rate_sd = std::atof(argv[16]);
   }
   SequenceFrameSource source(rec);
-  const body::MarkerSet set = cli::choose_marker_set_for(rec.labels, "", "").set;
-  const SampleSet samples = cli::cached_sample_set(46, opt.tracker.samples);
+  const body::MarkerSet set = app::choose_marker_set_for(rec.labels, "", "").set;
+  const SampleSet samples = app::cached_sample_set(46, opt.tracker.samples);
   const pipeline::Session session = pipeline::prepare_session(source, set, opt, samples);
   pipeline::RunOptions run_options;
   run_options.smooth = smooth;

@@ -3,6 +3,8 @@
 /// subcommand never touches main.cpp.
 #pragma once
 
+#include <s2kf/app/user_error.hpp>
+
 #include <CLI/CLI.hpp>
 
 #include <functional>
@@ -12,11 +14,9 @@
 
 namespace s2kf::cli {
 
-/// An error caused by what the user asked for (bad option, unreadable file): printed as one
-/// sentence, exit status 1, no stack of internals.
-struct UserError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+// The program is a front end of the application layer (include/s2kf/app/): its marker sets,
+// summaries, output files and errors (app::UserError: one sentence, exit status 1) are the program's.
+using namespace s2kf::app;
 
 struct Command {
   std::string name;

@@ -1,12 +1,12 @@
 // `s2kf live HOST[:PORT]`: track a motion capture system's stream (the QTM real-time protocol) as
 // it arrives, with the tracker `s2kf track` uses, sending every pose out over UDP as it is made,
 // and write the same files as `s2kf track` when the stream ends.
-#include "calibrated_subject.hpp"
+#include <s2kf/app/calibrated_subject.hpp>
 #include "command.hpp"
-#include "extra_outputs.hpp"
+#include "output_options.hpp"
 #include "interruption.hpp"
 #include "track_file.hpp"
-#include "track_summary.hpp"
+#include <s2kf/app/track_summary.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/pose.hpp>
@@ -90,7 +90,7 @@ std::string pose_message(const track::TrackedFrame& row, const std::vector<std::
 
 void run_live(LiveSettings settings) {
   TrackSettings& track = settings.track;
-  if (!track.markerset.empty() && !track.subject.empty())
+  if (!track.request.markerset.empty() && !track.request.subject.empty())
     throw UserError("give --markerset or --subject, not both (a subject file is a calibrated marker set)");
   const auto [host, port] = split_address(settings.address, live::kDefaultPort);
   const std::string name = host + ":" + std::to_string(port);
@@ -135,9 +135,9 @@ void run_live(LiveSettings settings) {
   live::LiveFrameSource source(*feed, source_options);
   // The session is prepared on a first stretch: a calibrated subject needs one second (the height
   // check), a calibration --calibration-seconds.
-  const double first_seconds = track.subject.empty() && track.calibrate ? settings.calibration_seconds : 1.0;
+  const double first_seconds = track.request.subject.empty() && track.request.calibrate ? settings.calibration_seconds : 1.0;
   const auto first_frames = std::max<std::int64_t>(1, std::llround(first_seconds * rate));
-  if (!track.quiet && track.subject.empty() && track.calibrate)
+  if (!track.quiet && track.request.subject.empty() && track.request.calibrate)
     std::cerr << "s2kf live: calibrating the subject on the first " << first_frames << " frames" << std::endl;
   const MarkerSequence& first = source.hold_first(first_frames);
   if (first.frame_count() == 0)
@@ -151,8 +151,8 @@ void run_live(LiveSettings settings) {
   input.frames = &source;
   input.rate_hz = rate;
   input.frame_count = -1;
-  track.calibration_frames = static_cast<int>(first.frame_count());
-  track.calibration_threads = every_core();  // one stream: its calibration may take every core
+  track.request.calibration_frames = static_cast<long>(first.frame_count());
+  track.request.calibration_threads = every_core();  // one stream: its calibration may take every core
 
   // The row's values are the pose columns after frame and time.
   std::vector<std::string> columns = body::pose_column_names(body::mmm_body_model(1000).joint_names());
@@ -229,18 +229,18 @@ const RegisterCommand live_registration{
       app.add_option("address", settings->address, "the server, HOST or HOST:PORT (default port 22223)")
           ->required();
       app.add_option("--out", track.out, "prefix of the output files (default: live)");
-      app.add_option("--markerset", track.markerset,
+      app.add_option("--markerset", track.request.markerset,
                      "marker set: a bundled name or a JSON file (default: the best)");
-      app.add_option("--subject", track.subject, "calibrated subject file written by s2kf calibrate");
+      app.add_option("--subject", track.request.subject, "calibrated subject file written by s2kf calibrate");
       app.add_option("--calibration-seconds", settings->calibration_seconds,
                      "calibrate the subject on this first stretch of the stream (default 10)")
           ->check(CLI::Range(0.1, 3600.0));
-      app.add_flag("!--no-calibrate", track.calibrate, "track with the marker set's subject as it is");
-      app.add_option("--height", track.height_mm, "body height in mm (default: estimated)")
+      app.add_flag("!--no-calibrate", track.request.calibrate, "track with the marker set's subject as it is");
+      app.add_option("--height", track.request.height_mm, "body height in mm (default: estimated)")
           ->check(CLI::Range(300.0, 3000.0));
-      app.add_option("--samples", track.samples, "S2KF sample count (default 301)")
+      app.add_option("--samples", track.request.samples, "S2KF sample count (default 301)")
           ->check(CLI::Range(3, 100001));
-      app.add_option("--preset", track.preset, "noise preset: default or paper")
+      app.add_option("--preset", track.request.preset, "noise preset: default or paper")
           ->check(CLI::IsMember({"default", "paper"}));
       app.add_option("--frames", settings->frames, "end after N frames")->check(CLI::PositiveNumber);
       app.add_option("--seconds", settings->seconds, "end after S seconds of stream")

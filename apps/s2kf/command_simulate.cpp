@@ -1,7 +1,7 @@
 // `s2kf simulate`: a synthetic recording with ground truth (C3D + _truth.csv + _clean.csv).
-#include "bundled_motions.hpp"
+#include <s2kf/app/bundled_motions.hpp>
 #include "command.hpp"
-#include "motion_json.hpp"
+#include <s2kf/app/motion_json.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/io/atomic_file.hpp>

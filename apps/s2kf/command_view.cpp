@@ -3,8 +3,8 @@
 // height and subject calibration from the summary, on the same recording), so the page shows the
 // same joint centres and model markers as `s2kf track --html`.
 #include "command.hpp"
-#include "marker_set_json.hpp"
-#include "tracker_samples.hpp"
+#include <s2kf/app/marker_set_json.hpp>
+#include <s2kf/app/sample_sets.hpp>
 #include "viewer/result_page.hpp"
 
 #include <s2kf/io/c3d_frame_source.hpp>

@@ -4,13 +4,13 @@
 #include "evaluate_run.hpp"
 #include "evaluation_inputs.hpp"
 
-#include "bundled_motions.hpp"
+#include <s2kf/app/bundled_motions.hpp>
 #include "command.hpp"
 #include "evaluation_files.hpp"
-#include "marker_set_json.hpp"
-#include "motion_json.hpp"
-#include "track_summary.hpp"
-#include "tracker_samples.hpp"
+#include <s2kf/app/marker_set_json.hpp>
+#include <s2kf/app/motion_json.hpp>
+#include <s2kf/app/track_summary.hpp>
+#include <s2kf/app/sample_sets.hpp>
 
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>

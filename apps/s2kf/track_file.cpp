@@ -2,17 +2,15 @@
 // the output files, and summarise.
 #include "track_file.hpp"
 
+#include <s2kf/app/extra_outputs.hpp>
+#include <s2kf/app/frame_reports.hpp>
+#include <s2kf/app/track_summary.hpp>
 #include "command.hpp"
-#include "extra_outputs.hpp"
 #include "frame_figure.hpp"
-#include "frame_reports.hpp"
-#include "inferred_marker_set.hpp"
 #include "interruption.hpp"
-#include "marker_set_json.hpp"
-#include "track_summary.hpp"
-#include "tracker_samples.hpp"
 #include "viewer/result_page.hpp"  // --html
 
+#include <s2kf/app/track_request.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/instruction_set.hpp>
 #include <s2kf/io/atomic_file.hpp>
@@ -23,7 +21,6 @@
 #include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -47,13 +44,6 @@ namespace s2kf::cli {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// Memory the smoother may take before --smooth refuses a recording (it keeps every frame's
-/// 46-state posterior, TrackingSmoother::kBytesPerFrame, about 17 KB).
-constexpr double kSmoothingMemoryLimitBytes = 8e9;
-
-/// Frames left out of the accuracy against the truth (the filter's start-up).
-constexpr long kTruthWarmupFrames = 20;
 
 }  // namespace
 
@@ -89,8 +79,8 @@ TrackOutcome track_file(const std::string& input, const std::string& prefix, con
   recording.frames = source.get();
   recording.rate_hz = info.rate;
   recording.frame_count = info.frame_count;
-  for (const c3d::PointLabel& label : info.labels)
-    if (label.model_output) recording.model_outputs.push_back(label.raw);
+  for (const c3d::PointLabel& label : info.labels)  // model outputs keep their names in the summary
+    recording.raw_labels.push_back(label.model_output ? label.raw : std::string());
   recording.warnings = info.warnings;
   recording.open_seconds = opening;
   return track_source(recording, prefix, settings, show_progress);
@@ -102,74 +92,16 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
   outside.read = input.open_seconds;
   auto stage_start = std::chrono::steady_clock::now();
   const bool known_length = input.frame_count >= 0;
-  // Ground truth, read before tracking so a wrong file fails fast.
-  std::optional<io::MotionTable> truth;
-  if (!settings.truth.empty()) {
-    try {
-      truth = io::load_motion_csv(settings.truth);
-    } catch (const std::exception& e) {
-      throw UserError(std::string("--truth: ") + e.what());
-    }
-    if (known_length && truth->frames() != input.frame_count)
-      throw UserError("--truth: " + settings.truth + " has " + std::to_string(truth->frames()) +
-                      " rows, but " + input.name + " has " + std::to_string(input.frame_count) + " frames");
-  }
-  const bool with_rates =
-      settings.motion_model.empty()
-          ? track::TrackerOptions{}.motion_model == track::MotionModel::constant_velocity
-          : track::motion_model_from_name(settings.motion_model) == track::MotionModel::constant_velocity;
-  const double smoothing_bytes = static_cast<double>(std::max<std::int64_t>(0, input.frame_count)) *
-                                 static_cast<double>(track::TrackingSmoother::bytes_per_frame(with_rates));
-  if (settings.smooth && smoothing_bytes > kSmoothingMemoryLimitBytes)
-    throw UserError(input.name + ": " + std::to_string(input.frame_count) +
-                    " frames are too many to smooth in memory (" + fixed_text(smoothing_bytes / 1e9, 1) +
-                    " GB); track without --smooth, or split the recording");
   if (known_length && settings.figure_frame >= input.frame_count)
     throw UserError(input.name + ": --figure " + std::to_string(settings.figure_frame) + " is beyond its " +
                     std::to_string(input.frame_count) + " frames (0-based)");
-
-  const MarkerSetChoice choice = choose_or_infer_marker_set(
-      input.name, input.prepare->labels(), settings.markerset, settings.subject, prefix + "_markerset.json");
-  pipeline::SessionOptions session_options;
-  try {
-    session_options.tracker = track::preset_options(settings.preset, input.rate_hz);
-  } catch (const std::invalid_argument& e) {
-    throw UserError(e.what());
-  }
-  if (settings.samples > 0) session_options.tracker.samples = settings.samples;
-  if (!settings.motion_model.empty())
-    session_options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
-  track::set_gain_from_name(session_options.tracker, settings.gain);
-  session_options.height_mm = settings.height_mm;
-  session_options.calibrate = settings.calibrate && settings.subject.empty();
-  session_options.calibration_frames = settings.calibration_frames;
-  session_options.calibration.weak_direction_shrink = settings.calibration_shrink;
-  session_options.noise_from_calibration = settings.noise_from_calibration;
-  session_options.calibration.threads = settings.calibration_threads;
-  const SampleSet samples = cached_sample_set(46, session_options.tracker.samples);
-  if (session_options.calibrate && settings.calibration_samples > 0 &&
-      settings.calibration_samples != session_options.tracker.samples)
-    session_options.calibration_samples = cached_sample_set(46, settings.calibration_samples);
-  pipeline::Session session;
-  try {
-    session = pipeline::prepare_session(*input.prepare, choice.set, session_options, samples);
-  } catch (const std::invalid_argument& e) {
-    throw UserError(input.name + ": " + e.what());
-  }
-  if (truth && truth->joint_names != session.model.joint_names())
-    throw UserError(
-        "--truth: " + settings.truth + " does not have the " + std::to_string(session.model.joint_count()) +
-        " joint columns of the body model (write it with s2kf simulate, whose _truth.csv has them)");
-  // Model outputs never match a marker; the summary lists them under their names in the file.
-  // (ignored labels keep the file's order, so the k-th empty one is the k-th model output).
-  auto empty = session.mapping.ignored_labels.begin();
-  for (const std::string& model_output : input.model_outputs) {
-    empty = std::find(empty, session.mapping.ignored_labels.end(), std::string());
-    if (empty != session.mapping.ignored_labels.end()) *empty++ = model_output;
-  }
-  std::vector<std::string> warnings = input.warnings;
-  warnings.insert(warnings.end(), session.warnings.begin(), session.warnings.end());
-  const std::vector<std::string> messages = marker_set_messages(choice, session.mapping);
+  app::RecordingDescription recording;
+  recording.input = input.name;
+  recording.raw_labels = input.raw_labels;
+  recording.file_warnings = input.warnings;
+  recording.inferred_markerset_path = prefix + "_markerset.json";
+  app::PreparedTrack prepared = app::prepare_track(*input.prepare, recording, settings.request);
+  const pipeline::Session& session = prepared.session;
 
   const auto start = std::chrono::steady_clock::now();
   const double frame_period = 1.0 / input.rate_hz;
@@ -226,27 +158,9 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
       figure_pose = body::pose_from_row(f.values);
     if (extra.on_row) extra.on_row(f);
   };
-  pipeline::RunOptions run_options;
-  run_options.method = settings.method == "s2kf" ? pipeline::Method::s2kf : pipeline::Method::baseline;
-  run_options.smooth = settings.smooth;
-  track::TrackingRun run;
-  try {
-    run = pipeline::run_session(session, *input.frames, samples, run_options, hooks);
-  } catch (const std::invalid_argument& e) {
-    throw UserError(input.name + ": " + e.what());
-  }
+  const track::TrackingRun run = app::run_track(prepared, *input.frames, settings.request, hooks);
   if (show_progress) std::cerr << "\n";
-  if (run.frames_tracked == 0)
-    throw UserError(input.name + ": no frame has the " +
-                    std::to_string(session.tracker.min_markers_to_start) +
-                    " visible markers needed to start tracking");
-  if (2 * run.frames_prediction_only > run.frames_tracked)
-    throw UserError(input.name + ": the filter's update failed in " +
-                    std::to_string(run.frames_prediction_only) + " of " + std::to_string(run.frames_tracked) +
-                    " tracked frames, which only repeat its prediction; no result is written (" +
-                    (run.warnings.empty() ? std::string("see the header and labels") : run.warnings.front()) +
-                    ")");
-  warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
+  std::vector<std::string>& warnings = prepared.warnings;
   std::string figure_file;
   if (settings.figure_frame >= 0) {
     std::string problem;
@@ -260,24 +174,18 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
       warnings.push_back(problem);
   }
 
-  // Accuracy against the truth, from the motion as written (frames from the 20th on), read back
-  // before the set is committed.
-  std::optional<evaluation::TruthComparison> accuracy;
-  if (truth) {
+  // Accuracy against the truth from the motion as written, read back before the set is committed.
+  std::optional<io::MotionTable> written;
+  if (prepared.truth) {
     try {
-      accuracy = evaluation::compare_with_truth(session.model, io::load_motion_csv(motion_files.flushed_csv()),
-                                           *truth, kTruthWarmupFrames);
+      written = io::load_motion_csv(motion_files.flushed_csv());
     } catch (const std::invalid_argument& e) {
-      throw UserError("--truth: " + settings.truth + ": " + e.what());
+      throw UserError("--truth: " + settings.request.truth + ": " + e.what());
     }
   }
-  nlohmann::json summary = track_summary(input.name, settings.method, choice, messages, session, run,
-                                         settings.smooth, warnings, settings.calibration_shrink, outside);
+  nlohmann::json summary =
+      app::summarize_track(prepared, run, settings.request, written ? &*written : nullptr, outside);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
-  if (accuracy) {
-    summary["truth"] = truth_json(*accuracy);
-    summary["truth"]["warmup_frames"] = kTruthWarmupFrames;
-  }
   if (extra.on_summary) extra.on_summary(summary);
   // Labels and file names are UTF-8 (the reader decodes Latin-1); anything else is replaced, never
   // a reason to lose the run.
@@ -286,7 +194,7 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
   throw_if_interrupted();
   motion_files.finish();
   if (settings.html)
-    viewer::write_result_page(prefix, session.model, session.mapping, settings.truth);  // --html
+    viewer::write_result_page(prefix, session.model, session.mapping, settings.request.truth);  // --html
 
   std::ostringstream paragraph;
   paragraph << track_paragraph(summary, name);

@@ -1,11 +1,11 @@
 /// @file
 /// One recording through `s2kf track`: its settings (the command's options), and the work that
-/// turns one C3D file into the output files, its summary and the paragraph the command prints.
+/// turns a recording (a C3D file, or a stream for `s2kf live`) into the output files, its summary
+/// and the paragraph the command prints.
 #pragma once
 
-#include "extra_outputs.hpp"
-
-#include <s2kf/calibration/subject_calibration.hpp>
+#include <s2kf/app/extra_outputs.hpp>
+#include <s2kf/app/track_request.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/track/tracking_run.hpp>
 
@@ -18,36 +18,21 @@
 
 namespace s2kf::cli {
 
+/// `s2kf track`'s options: the tracking request (app::TrackRequest, shared with Python) and what is
+/// the program's own: files, printing, pacing, the batch.
 struct TrackSettings {
   std::vector<std::string> inputs;
   std::string out;
-  double height_mm = 0;  // 0: estimate
-  int samples = 0;       // 0: the preset's
-  std::string preset = "default";
-  std::string motion_model;               // empty: the preset's
-  std::string gain = "information-form";  // square-root, information-form-root-products (TrackerOptions)
-  std::string method = "s2kf";
-  std::string markerset;       // empty: the bundled set that matches best
-  std::string subject;         // a calibrated subject file (s2kf calibrate)
-  std::string static_trial;    // a static trial: the subject is calibrated on it first (--static)
-  double static_sd_deg = 3.0;  // --static-sd
-  bool calibrate = true;       // calibrate the subject on the recording first (not with --subject)
-  int calibration_frames = 1200;
-  double calibration_shrink = calibration::CalibrationOptions{}.weak_direction_shrink;
-  bool noise_from_calibration = true;  // false: --uniform-noise
-  int calibration_samples = 0;         // the calibration's tracking pass; 0: the tracker's samples
-  int calibration_threads = 1;         // set by run_track: every core for one recording, 1 in a batch
-  bool smooth = false;
-  long figure_frame = -1;  // >= 0: draw this frame
-  std::string truth;       // a ground-truth motion CSV (simulated recordings): accuracy in the summary
+  app::TrackRequest request;  // marker set, subject, calibration, tracker, smoothing, truth
+  long figure_frame = -1;     // >= 0: draw this frame
   bool realtime = false;
   bool quiet = false;
   int jobs = 0;
-  std::string shard;       // "I/N": track only the I-th of N parts of the recordings (0-based)
-  bool dry_run = false;    // list the recordings and their output prefixes, track nothing
-  bool verbose = false;    // also print the seconds per stage
-  bool html = false;       // also write PREFIX.html, the interactive 3D page (s2kf view)
-  OutputSettings outputs;  // --formats, --bvh-units, --derivatives (extra_outputs.hpp)
+  std::string shard;            // "I/N": track only the I-th of N parts of the recordings (0-based)
+  bool dry_run = false;         // list the recordings and their output prefixes, track nothing
+  bool verbose = false;         // also print the seconds per stage
+  bool html = false;            // also write PREFIX.html, the interactive 3D page (s2kf view)
+  app::OutputSettings outputs;  // --formats, --bvh-units, --derivatives (app/extra_outputs.hpp)
 };
 
 struct TrackOutcome {
@@ -64,8 +49,8 @@ struct TrackInput {
   FrameSource* prepare = nullptr;  ///< frames the height and the calibration are taken from
   FrameSource* frames = nullptr;   ///< frames tracked, read in order until read() says false
   double rate_hz = 0;
-  std::int64_t frame_count = -1;           ///< -1: not known in advance (a stream)
-  std::vector<std::string> model_outputs;  ///< labels of model outputs (C3D), in the file's order
+  std::int64_t frame_count = -1;        ///< -1: not known in advance (a stream)
+  std::vector<std::string> raw_labels;  ///< one per point, model outputs (C3D) named, others empty; or none
   std::vector<std::string> warnings;
   double open_seconds = 0;  ///< spent opening the source (the summary's read stage)
 };
@@ -78,13 +63,12 @@ struct TrackHooks {
   std::function<void(nlohmann::json&)> on_summary;
 };
 
-/// Tracks a recording through the library's pipeline (prepare a session, run it) into the output
+/// Tracks a recording through the application layer (prepare a session, run it) into the output
 /// files, all or none; returns the summary and the paragraph to print.
 TrackOutcome track_source(const TrackInput& input, const std::string& prefix, const TrackSettings& settings,
                           bool show_progress, const TrackHooks& hooks = {});
 
-/// Tracks one recording through the library's pipeline (prepare a session, run it) into the
-/// output files; returns the summary and the paragraph to print.
+/// Tracks one C3D file (track_source on it); returns the summary and the paragraph to print.
 TrackOutcome track_file(const std::string& input, const std::string& prefix, const TrackSettings& settings,
                         bool show_progress);
 

@@ -1,8 +1,7 @@
 /// @file
-/// Where the module finds the bundled data (marker sets, motions): $S2KF_DATA_DIR, else the
-/// source tree's data/ compiled in, the same rule the command-line program follows. An installed
-/// module (a wheel from `pip install .`) carries its data in s2kf_data/ beside it, which
-/// use_installed_data() makes the default.
+/// Where an installed module finds the bundled data: a wheel from `pip install .` carries it in
+/// s2kf_data/ beside the module's shared object, which use_installed_data() makes the default of
+/// app::data_directory() ($S2KF_DATA_DIR, else the source tree's data/ compiled in).
 #pragma once
 
 #include <dlfcn.h>
@@ -12,12 +11,6 @@
 #include <system_error>
 
 namespace s2kf::python {
-
-inline std::filesystem::path data_directory() {
-  if (const char* from_environment = std::getenv("S2KF_DATA_DIR"); from_environment && *from_environment)
-    return from_environment;
-  return S2KF_DATA_DIR;
-}
 
 /// Sets $S2KF_DATA_DIR to the s2kf_data/ folder beside this module's shared object when that folder
 /// exists and the variable is unset: the module's C++ code (marker sets, motions) reads the variable,

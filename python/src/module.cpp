@@ -4,6 +4,7 @@
 #include "bindings.hpp"
 #include "data_directory.hpp"
 
+#include <s2kf/app/user_error.hpp>
 #include <s2kf/core/error.hpp>
 #include <s2kf/io/c3d_error.hpp>
 
@@ -28,6 +29,8 @@ PYBIND11_MODULE(s2kf, module) {
       if (error) std::rethrow_exception(error);
     } catch (const s2kf::c3d::C3dError& e) {
       PyErr_SetString(PyExc_OSError, e.what());
+    } catch (const s2kf::app::UserError& e) {  // what the user asked for: a bad value
+      PyErr_SetString(PyExc_ValueError, e.what());
     }
   });
 

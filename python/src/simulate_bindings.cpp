@@ -2,10 +2,10 @@
 /// s2kf.simulate: a synthetic recording with ground truth, made exactly as `s2kf simulate` makes it
 /// (the same motion files, subject, noise and occlusion draws for the same seed), as numpy arrays.
 #include "bindings.hpp"
-#include "data_directory.hpp"
 #include "numpy_bridge.hpp"
 
-#include "motion_json.hpp"  // apps/s2kf: the motion-file reader the CLI uses
+#include <s2kf/app/bundled_motions.hpp>
+#include <s2kf/app/motion_json.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/sim/recording.hpp>
@@ -34,29 +34,15 @@ struct Simulation {
   Eigen::MatrixXd truth;  // 46 x F
 };
 
-std::vector<std::string> bundled_motions() {
-  std::vector<std::string> names;
-  std::error_code error;
-  for (const auto& entry : fs::directory_iterator(data_directory() / "motions", error))
-    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
+std::vector<std::string> bundled_motions() { return app::motion_names(); }
 
-/// A bundled motion's name or the path of a motion .json file (the CLI's rule and messages).
+/// A bundled motion's name or the path of a motion .json file (the program's rule and messages).
 fs::path resolve_motion(const std::string& motion) {
-  const fs::path as_path(motion);
-  if (as_path.extension() == ".json") {
-    if (!fs::exists(as_path)) throw py::value_error("the motion file " + motion + " does not exist");
-    return as_path;
+  try {
+    return app::resolve_motion(motion);
+  } catch (const app::UserError& e) {
+    throw py::value_error(e.what());
   }
-  const fs::path bundled = data_directory() / "motions" / (motion + ".json");
-  if (fs::exists(bundled)) return bundled;
-  std::string known;
-  for (const auto& name : bundled_motions()) known += (known.empty() ? "" : ", ") + name;
-  throw py::value_error("unknown motion '" + motion + "' (known: " +
-                        (known.empty() ? "none found in " + (data_directory() / "motions").string() : known) +
-                        "; or give a .json file)");
 }
 
 void require_range(double value, double low, double high, const std::string& what) {
@@ -95,11 +81,11 @@ Simulation simulate(const std::string& motion_name, std::uint64_t seed, double h
 
   py::gil_scoped_release unlocked;
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(height_mm), subject_options, seed);
-  const cli::JointTable joints{subject.joint_names, subject.lower, subject.upper};
+  const app::JointTable joints{subject.joint_names, subject.lower, subject.upper};
   // Same order of calls as `s2kf simulate`: motion, dropout check, recording.
   sim::Recording recording;
   try {
-    const sim::KeyframeMotion motion = cli::load_motion_file(motion_file, joints, seed);
+    const sim::KeyframeMotion motion = app::load_motion_file(motion_file, joints, seed);
     for (const sim::SegmentDropout& dropout : options.segment_dropouts)
       sim::markers_of_segment(subject, dropout.segment);
     recording = sim::simulate_recording(motion, subject, options, seed);

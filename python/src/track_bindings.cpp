@@ -6,13 +6,12 @@
 #include "bindings.hpp"
 #include "numpy_bridge.hpp"
 #include "streaming_tracker.hpp"
-#include "track_pipeline.hpp"
 
-#include "calibrated_subject.hpp"  // apps/s2kf: the calibration `s2kf calibrate` runs
+#include <s2kf/app/calibrated_subject.hpp>
+#include <s2kf/app/sample_sets.hpp>
+#include <s2kf/app/track_request.hpp>
+#include <s2kf/app/user_error.hpp>
 
-#include "command.hpp"  // apps/s2kf: the program's error type, cli::UserError
-
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/bvh.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>
@@ -37,6 +36,28 @@ namespace s2kf::python {
 namespace {
 
 namespace fs = std::filesystem;
+
+/// A tracked recording: the request's preparation (marker set, session, samples), the run, and the
+/// summary `s2kf track` writes.
+struct TrackResult {
+  std::string name;  // the .mot file's first line: the recording's file stem
+  app::PreparedTrack prepared;
+  track::TrackingRun run;
+  nlohmann::json summary;
+  Eigen::Index point_count = 0;
+};
+
+/// The request through the application layer, as `s2kf track` runs it (without its files).
+std::unique_ptr<TrackResult> track_request(FrameSource& source, const app::RecordingDescription& recording,
+                                           const std::string& name, const app::TrackRequest& request) {
+  auto result = std::make_unique<TrackResult>();
+  result->name = name;
+  result->point_count = static_cast<Eigen::Index>(source.labels().size());
+  result->prepared = app::prepare_track(source, recording, request);
+  result->run = app::run_track(result->prepared, source, request);
+  result->summary = app::summarize_track(result->prepared, result->run, request);
+  return result;
+}
 
 /// Frames read in place from a C-ordered (F, P, 3) float64 array: no copy of the recording. A
 /// point is visible where its coordinates are finite.
@@ -75,31 +96,11 @@ class ArrayFrameSource : public FrameSource {
   throw py::error_already_set();
 }
 
-/// The range `--static-sd` takes, as ValueError.
-void check_static_sd(double static_sd) {
-  if (!(static_sd >= 0.1 && static_sd <= 90.0))
-    throw py::value_error("static_sd must lie between 0.1 and 90 degrees");
-}
-
-/// The CLI's checks on the settings (its option ranges), as ValueError.
-void check_settings(const TrackSettings& settings) {
-  if (settings.samples < 3 || settings.samples > 100001)
-    throw py::value_error("samples must lie between 3 and 100001, got " + std::to_string(settings.samples));
-  if (settings.height_mm != 0 && !(settings.height_mm >= 300 && settings.height_mm <= 3000))
-    throw py::value_error("height_mm must lie between 300 and 3000 (or be 0: estimated), got " +
-                          number_text(settings.height_mm));
-  if (settings.method != "s2kf" && settings.method != "baseline")
-    throw py::value_error("method must be 's2kf' or 'baseline', not '" + settings.method + "'");
-  if (settings.calibration_frames < 10) throw py::value_error("calibration_frames must be at least 10");
-  if (!(settings.calibration_shrink >= 0 && settings.calibration_shrink <= 1e6))
-    throw py::value_error("calibration_shrink must lie in [0, 1e6]");
-}
-
 std::unique_ptr<TrackResult> track(const py::object& recording, const py::object& labels_value,
-                                   const py::object& rate_value, const TrackSettings& settings,
+                                   const py::object& rate_value, const app::TrackRequest& request,
                                    const py::object& model_output_value, const py::object& name_value) {
-  check_settings(settings);
   try {
+    app::check_request(request);
     // A C3D file: read as the program reads it, frame by frame.
     if (py::isinstance<py::str>(recording) || py::hasattr(recording, "__fspath__")) {
       if (!labels_value.is_none() || !rate_value.is_none())
@@ -109,10 +110,11 @@ std::unique_ptr<TrackResult> track(const py::object& recording, const py::object
       if (!fs::exists(path)) raise_user_error(path + ": no such file (it does not exist)");
       py::gil_scoped_release unlocked;
       c3d::C3dFrameSource source(path);
-      std::vector<std::string> raw;
-      for (const c3d::PointLabel& label : source.info().labels) raw.push_back(label.raw);
-      return run_pipeline(source, path, fs::path(path).stem().string(), raw, source.info().warnings,
-                          settings);
+      app::RecordingDescription description;
+      description.input = path;
+      for (const c3d::PointLabel& label : source.info().labels) description.raw_labels.push_back(label.raw);
+      description.file_warnings = source.info().warnings;
+      return track_request(source, description, fs::path(path).stem().string(), request);
     }
     // Points with labels and a rate, given or taken from a read_c3d / simulate result.
     py::object points_value = recording, model_output = model_output_value;
@@ -152,8 +154,12 @@ std::unique_ptr<TrackResult> track(const py::object& recording, const py::object
     const std::string name = name_value.is_none() ? std::string("recording") : name_value.cast<std::string>();
     py::gil_scoped_release unlocked;
     ArrayFrameSource source(points.data(), points.shape(0), matched, rate);
-    return run_pipeline(source, name, name, labels, file_warnings, settings);
-  } catch (const cli::UserError& e) {
+    app::RecordingDescription description;
+    description.input = name;
+    description.raw_labels = labels;
+    description.file_warnings = file_warnings;
+    return track_request(source, description, name, request);
+  } catch (const app::UserError& e) {
     raise_user_error(e.what());
   }
 }
@@ -161,7 +167,7 @@ std::unique_ptr<TrackResult> track(const py::object& recording, const py::object
 /// s2kf.calibrate: `s2kf calibrate` without its report and .osim file: the calibrated subject as
 /// the document a subject file holds (a dict), also written to `out` when given.
 py::object calibrate(const py::object& recording, const py::object& out,
-                     const cli::SubjectSettings& settings) {
+                     const app::SubjectSettings& settings) {
   const py::object fspath = py::module_::import("os").attr("fspath");
   const std::string path = py::str(fspath(recording));
   const std::string out_path = out.is_none() ? std::string() : std::string(py::str(fspath(out)));
@@ -171,11 +177,11 @@ py::object calibrate(const py::object& recording, const py::object& out,
   try {
     if (!fs::exists(path)) raise_user_error(path + ": no such file (it does not exist)");
     py::gil_scoped_release unlocked;
-    const cli::CalibratedSubject calibrated = cli::calibrate_subject_file(
-        path, "", settings, lcd_sample_set(6 + body::kJointCount, track::TrackerOptions{}.samples).set, name);
-    document = cli::subject_document(calibrated, path);
-    if (!out_path.empty()) cli::write_subject_file(out_path, document);
-  } catch (const cli::UserError& e) {
+    const app::CalibratedSubject calibrated = app::calibrate_subject_file(
+        path, "", settings, app::cached_sample_set(6 + body::kJointCount, app::TrackRequest{}.samples), name);
+    document = app::subject_document(calibrated, path);
+    if (!out_path.empty()) app::write_subject_file(out_path, document);
+  } catch (const app::UserError& e) {
     raise_user_error(e.what());
   }
   return py::module_::import("json").attr("loads")(document.dump());
@@ -272,12 +278,12 @@ void bind_track(py::module_& module) {
           [](const TrackResult& r) { return py::module_::import("json").attr("loads")(r.summary.dump()); },
           "the dict `s2kf track` writes as PREFIX.json")
       .def_property_readonly(
-          "messages", [](const TrackResult& r) { return r.messages; },
+          "messages", [](const TrackResult& r) { return r.prepared.messages; },
           "what the program prints about the marker set")
       .def_property_readonly(
-          "model", [](const TrackResult& r) { return r.session.model; },
+          "model", [](const TrackResult& r) { return r.prepared.session.model; },
           "the body model tracked with: the marker set applied, scaled, calibrated")
-      .def_property_readonly("height_mm", [](const TrackResult& r) { return r.session.height_mm; })
+      .def_property_readonly("height_mm", [](const TrackResult& r) { return r.prepared.session.height_mm; })
       .def(
           "to_csv",
           [](const TrackResult& r, const std::string& path) { io::save_motion_csv(path, r.run.motion); },
@@ -291,7 +297,7 @@ void bind_track(py::module_& module) {
       .def(
           "to_bvh",
           [](const TrackResult& r, const std::string& path) {
-            io::save_bvh(path, r.session.model, r.run.motion, r.session.rate_hz);
+            io::save_bvh(path, r.prepared.session.model, r.run.motion, r.prepared.session.rate_hz);
           },
           py::arg("path"), "BVH for Blender")
       .def("to_json", &write_summary, py::arg("path"), "the summary as `s2kf track` writes PREFIX.json")
@@ -302,7 +308,7 @@ void bind_track(py::module_& module) {
           [](const TrackResult& r, const std::string& prefix) {
             io::save_motion_csv(prefix + ".csv", r.run.motion);
             io::save_opensim_mot(prefix + ".mot", r.run.motion, r.name);
-            io::save_bvh(prefix + ".bvh", r.session.model, r.run.motion, r.session.rate_hz);
+            io::save_bvh(prefix + ".bvh", r.prepared.session.model, r.run.motion, r.prepared.session.rate_hz);
             write_summary(r, prefix + ".json");
             write_marker_report(r, prefix + "_markers.csv");
           },
@@ -310,8 +316,9 @@ void bind_track(py::module_& module) {
       .def(
           "tracker",
           [](const TrackResult& r) {
-            return std::make_unique<StreamingTracker>(r.session.model, r.session.mapping, r.session.tracker,
-                                                      r.session.rate_hz, r.samples, r.point_count);
+            return std::make_unique<StreamingTracker>(r.prepared.session.model, r.prepared.session.mapping,
+                                                      r.prepared.session.tracker, r.prepared.session.rate_hz,
+                                                      r.prepared.samples, r.point_count);
           },
           "a fresh streaming Tracker with this result's model, marker mapping and options: feeding it the "
           "recording's frames reproduces the (unsmoothed) motion")
@@ -320,71 +327,88 @@ void bind_track(py::module_& module) {
                std::to_string(r.run.frames) + " frames tracked>";
       });
 
+  // The keywords are `s2kf track`'s options (dashes as underscores) with the same defaults, from
+  // one app::TrackRequest; python/tests/test_parity.py checks them against `s2kf track --help`.
+  const app::TrackRequest defaults;
   module.def(
       "track",
       [](const py::object& recording, const py::object& labels, const py::object& rate,
          const py::object& markerset, const py::object& subject, const py::object& static_trial,
-         double static_sd, bool calibrate, std::int64_t calibration_frames, double calibration_shrink,
-         bool uniform_noise, bool smooth, int samples, double height_mm, const std::string& preset,
-         const std::string& gain, const std::string& method, const py::object& model_output,
-         const py::object& name) {
-        TrackSettings settings;
-        settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();
-        settings.subject = subject.is_none() ? std::string() : py::str(subject).cast<std::string>();
-        settings.static_trial =
-            static_trial.is_none() ? std::string() : py::str(static_trial).cast<std::string>();
-        check_static_sd(static_sd);
-        settings.static_sd_deg = static_sd;
-        settings.calibrate = calibrate;
-        settings.calibration_frames = calibration_frames;
-        settings.calibration_shrink = calibration_shrink;
-        settings.uniform_noise = uniform_noise;
-        settings.smooth = smooth;
-        settings.samples = samples;
-        settings.height_mm = height_mm;
-        settings.preset = preset;
-        settings.gain = gain;
-        settings.method = method;
-        return track(recording, labels, rate, settings, model_output, name);
+         double static_sd, bool calibrate, std::int64_t calibration_frames, int calibration_samples,
+         double calibration_shrink, bool uniform_noise, bool smooth, int samples, double height,
+         const py::object& height_mm, const std::string& preset, const std::string& motion_model,
+         const std::string& gain, const std::string& method, const py::object& truth,
+         const py::object& model_output, const py::object& name) {
+        const auto text = [](const py::object& value) {
+          return value.is_none() ? std::string() : py::str(value).cast<std::string>();
+        };
+        app::TrackRequest request;
+        request.names = app::OptionNames::python;
+        request.markerset = text(markerset);
+        request.subject = text(subject);
+        request.static_trial = text(static_trial);
+        request.static_sd_deg = static_sd;
+        request.calibrate = calibrate;
+        request.calibration_frames = static_cast<long>(calibration_frames);
+        request.calibration_samples = calibration_samples;
+        request.calibration_shrink = calibration_shrink;
+        request.uniform_noise = uniform_noise;
+        request.smooth = smooth;
+        request.samples = samples;
+        request.height_mm =
+            height_mm.is_none() ? height : height_mm.cast<double>();  // height_mm: the old name
+        request.preset = preset;
+        request.motion_model = motion_model;
+        request.gain = gain;
+        request.method = method;
+        request.truth = text(truth);
+        return track(recording, labels, rate, request, model_output, name);
       },
       py::arg("recording"), py::arg("labels") = py::none(), py::arg("rate") = py::none(), py::kw_only(),
       py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("static") = py::none(),
-      py::arg("static_sd") = 3.0, py::arg("calibrate") = true, py::arg("calibration_frames") = 1200,
-      py::arg("calibration_shrink") = calibration::CalibrationOptions{}.weak_direction_shrink,
-      py::arg("uniform_noise") = false, py::arg("smooth") = false, py::arg("samples") = 301,
-      py::arg("height_mm") = 0.0, py::arg("preset") = "default", py::arg("gain") = "information-form",
-      py::arg("method") = "s2kf", py::arg("model_output") = py::none(), py::arg("name") = py::none(),
-      "Tracks a whole recording as `s2kf track` does: track('walk.c3d'), track(s2kf.read_c3d(...)), or "
-      "track(points, labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
+      py::arg("static_sd") = defaults.static_sd_deg, py::arg("calibrate") = defaults.calibrate,
+      py::arg("calibration_frames") = defaults.calibration_frames,
+      py::arg("calibration_samples") = defaults.calibration_samples,
+      py::arg("calibration_shrink") = defaults.calibration_shrink,
+      py::arg("uniform_noise") = defaults.uniform_noise, py::arg("smooth") = defaults.smooth,
+      py::arg("samples") = defaults.samples, py::arg("height") = defaults.height_mm,
+      py::arg("height_mm") = py::none(), py::arg("preset") = defaults.preset,
+      py::arg("motion_model") = defaults.motion_model, py::arg("gain") = defaults.gain,
+      py::arg("method") = defaults.method, py::arg("truth") = py::none(),
+      py::arg("model_output") = py::none(), py::arg("name") = py::none(),
+      "Tracks a whole recording as `s2kf track` does, with its options as keywords (dashes as "
+      "underscores, the same defaults): track('walk.c3d'), track(s2kf.read_c3d(...)), or track(points, "
+      "labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
       "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "
       "static: a C3D static trial in the model's zero pose, on which the subject is calibrated first "
-      "(as `s2kf track --static`; static_sd: each joint's SD from the zero pose there, degrees); "
-      "calibrate: fit the subject's offsets and bone lengths on the first calibration_frames frames; "
-      "calibration_shrink: C, a weakly seen offset direction keeps mu / (mu + C) of the data's step; "
-      "uniform_noise: every marker the same noise (else each its calibration residual's); smooth: "
-      "RTS smoothing; height_mm: 0 estimates it; gain: 'information-form', 'square-root' (the exact update) "
-      "or "
-      "'information-form-root-products' (as `s2kf track --gain`); model_output: (P,) bool, points that are "
-      "not markers. "
-      "Runs without the GIL. Returns a TrackResult.");
+      "(static_sd: each joint's SD from the zero pose there, degrees); calibrate: fit the subject's "
+      "offsets and bone lengths on calibration_frames frames spread over the recording (calibration_samples: "
+      "the samples of its tracking pass, 0: samples); calibration_shrink: C, a weakly seen offset direction "
+      "keeps mu / (mu + C) of the data's step; uniform_noise: every marker the same noise (else each its "
+      "calibration residual's); smooth: RTS smoothing; height: mm, 0 estimates it (height_mm: the same, "
+      "its former name); motion_model: 'random-walk' or 'constant-velocity'; gain: 'information-form' or "
+      "'square-root' (the exact update); truth: a ground-truth motion CSV, whose accuracy goes into the "
+      "summary; model_output: (P,) bool, points that are not markers. Runs without the GIL. Returns a "
+      "TrackResult.");
 
   module.def(
       "calibrate",
       [](const py::object& recording, const py::object& out, bool static_pose, double static_sd,
          const py::object& markerset, double height_mm, std::int64_t frames, bool uniform_noise) {
-        cli::SubjectSettings settings;
+        app::SubjectSettings settings;
         settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();
         if (height_mm != 0 && !(height_mm >= 300 && height_mm <= 3000))
           throw py::value_error("height_mm must lie between 300 and 3000 (or be 0: estimated), got " +
                                 number_text(height_mm));
         if (frames < 10) throw py::value_error("frames must be at least 10");
-        check_static_sd(static_sd);
+        if (!(static_sd >= 0.1 && static_sd <= 90.0))
+          throw py::value_error("static_sd must lie between 0.1 and 90 degrees");
         settings.height_mm = height_mm;
         settings.frames = static_cast<long>(frames);
         settings.noise_from_calibration = !uniform_noise;
         settings.static_pose = static_pose;
         settings.static_sd_deg = static_sd;
-        settings.threads = cli::every_core();
+        settings.threads = app::every_core();
         return calibrate(recording, out, settings);
       },
       py::arg("recording"), py::kw_only(), py::arg("out") = py::none(), py::arg("static") = false,

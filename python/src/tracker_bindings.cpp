@@ -7,12 +7,14 @@
 #include "numpy_bridge.hpp"
 #include "streaming_tracker.hpp"
 
-#include "marker_set_json.hpp"  // apps/s2kf: bundled marker sets and marker-set files
+#include <s2kf/app/marker_set_json.hpp>
+#include <s2kf/app/sample_sets.hpp>
+#include <s2kf/app/track_request.hpp>
 
 #include <s2kf/body/body_model.hpp>
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
@@ -38,8 +40,8 @@ std::unique_ptr<StreamingTracker> streaming_tracker_for_marker_set(const std::ve
     throw py::value_error("height_mm must lie between 300 and 3000, got " + number_text(height_mm));
   body::MarkerSet set;
   try {
-    set = cli::resolve_marker_set(markerset);
-  } catch (const cli::UserError& e) {
+    set = app::resolve_marker_set(markerset);
+  } catch (const app::UserError& e) {
     throw py::value_error(e.what());
   }
   const body::BodyModel model = body::apply_marker_set(body::mmm_body_model(set.reference_height_mm), set);
@@ -51,21 +53,21 @@ std::unique_ptr<StreamingTracker> streaming_tracker_for_marker_set(const std::ve
     throw py::value_error("the frame rate must be a positive number of Hz, got " + number_text(rate));
   options.marker_noise_mm_per_marker = pipeline::marker_noise_of(set);
   py::gil_scoped_release unlocked;
-  const SampleSet samples = lcd_sample_set(model.joint_count() + 6, options.samples).set;
+  const SampleSet samples = app::cached_sample_set(model.joint_count() + 6, options.samples);
   return std::make_unique<StreamingTracker>(model.scaled(height_mm), mapping, std::move(options), rate,
                                             samples, static_cast<Eigen::Index>(labels.size()));
 }
 
 track::TrackerOptions tracker_options(const std::string& preset, const std::string& gain, double rate,
                                       int samples, double marker_noise_mm, double gate_probability) {
-  track::TrackerOptions options;
-  try {
-    options = track::preset_options(preset, rate);
-    track::set_gain_from_name(options, gain);
-  } catch (const std::invalid_argument& e) {
-    throw py::value_error(e.what());
-  }
-  if (samples > 0) options.samples = samples;
+  // The preset, samples and gain as s2kf.track and `s2kf track` take them (app::TrackRequest).
+  app::TrackRequest request;
+  request.names = app::OptionNames::python;
+  request.preset = preset;
+  request.gain = gain;
+  if (samples > 0) request.samples = samples;
+  app::check_request(request);
+  track::TrackerOptions options = app::tracker_options(request, rate);
   if (marker_noise_mm > 0) options.marker_noise_mm = marker_noise_mm;
   options.gate_probability = gate_probability;
   options.validate();
@@ -131,7 +133,7 @@ void bind_tracker(py::module_& module) {
           "labels: one per point; rate: Hz; model: a BodyModel whose marker names the labels are (default: "
           "the KIT model at height_mm); markerset: 'kit', 'cmu', 'plugin_gait' or a .json file instead, on a "
           "subject of height_mm; samples: S2KF sample count; preset: 'default' or 'paper'; gain: "
-          "'information-form', 'square-root' or 'information-form-root-products'; marker_noise_mm: "
+          "'information-form' or 'square-root' (the exact update); marker_noise_mm: "
           "0 keeps the preset's")
       .def("process", &StreamingTracker::process, py::arg("frame"), py::arg("visible") = py::none(),
            "One frame: (P, 3) mm in label order (NaN: hidden), optional (P,) visibility. Returns a "

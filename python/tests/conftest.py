@@ -35,4 +35,5 @@ def cli():
         assert done.returncode == 0, done.stderr
         return done.stdout
 
+    run.path = path  # for tests that read the program's own output (--help)
     return run

@@ -151,10 +151,12 @@ def test_bad_recordings_are_python_errors(tmp_path, data_dir):
         s2kf.track(points, labels, rate, calibration_shrink=-1.0)
     with pytest.raises(ValueError, match="method must be 's2kf' or 'baseline'"):
         s2kf.track(points, labels, rate, method="ukf")
-    with pytest.raises(ValueError, match="unknown gain 'kalman' \\(use information-form, square-root"):
+    with pytest.raises(ValueError, match=r"unknown gain 'kalman' \(use 'information-form' or 'square-root'\)"):
         s2kf.track(points, labels, rate, gain="kalman")
     with pytest.raises(ValueError, match="unknown gain 'kalman'"):
         s2kf.Tracker(labels, rate, gain="kalman")
+    with pytest.raises(ValueError, match="the gain 'information-form-root-products' was removed: .* use 'square-root'"):
+        s2kf.track(points, labels, rate, gain="information-form-root-products")
 
 
 def test_bad_files_are_os_errors(tmp_path):

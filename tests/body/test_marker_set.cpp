@@ -1,6 +1,6 @@
 // Marker sets as data: parsing and validation, applying a set to the model, choosing the set that
 // fits a recording, and the subject file `s2kf calibrate` writes.
-#include "../../apps/s2kf/marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
@@ -32,7 +32,7 @@ std::vector<std::string> labels_in_file(const std::string& file) {
 
 std::string parse_error(const std::string& text) {
   try {
-    const body::MarkerSet set = cli::marker_set_from_json(nlohmann::json::parse(text), "test.json");
+    const body::MarkerSet set = app::marker_set_from_json(nlohmann::json::parse(text), "test.json");
     body::apply_marker_set(body::mmm_body_model(1000), set);
   } catch (const std::invalid_argument& e) {
     return e.what();
@@ -80,7 +80,7 @@ TEST(MarkerSet, ParsingAndValidationNameTheProblem) {
 // joint_limits replace the model's range of the named joints only, and travel through the JSON
 // form and into the subject file s2kf calibrate writes.
 TEST(MarkerSet, JointLimitsReplaceTheModelsRange) {
-  body::MarkerSet set = cli::resolve_marker_set("cmu");
+  body::MarkerSet set = app::resolve_marker_set("cmu");
   set.joint_limits["LKx"] = {-2.6, 0.0};
   set.joint_limits["RAy"] = {-0.6, 0.5};
   const body::BodyModel base = body::mmm_body_model(1750);
@@ -93,9 +93,9 @@ TEST(MarkerSet, JointLimitsReplaceTheModelsRange) {
     EXPECT_EQ(model.joints[j].upper, upper) << name;
   }
   EXPECT_NE(base.joints[base.joint_index("LKx")].lower, -2.6);  // the model's own range differs
-  const body::MarkerSet again = cli::marker_set_from_json(cli::marker_set_to_json(set), "again");
+  const body::MarkerSet again = app::marker_set_from_json(app::marker_set_to_json(set), "again");
   EXPECT_EQ(again.joint_limits, set.joint_limits);
-  const body::MarkerSet subject = cli::subject_marker_set(set, model.scaled(1750), {}, {}, "subject");
+  const body::MarkerSet subject = app::subject_marker_set(set, model.scaled(1750), {}, {}, "subject");
   EXPECT_EQ(subject.joint_limits, set.joint_limits);
   EXPECT_EQ(body::apply_marker_set(base, subject).joints[base.joint_index("LKx")].lower, -2.6);
 }
@@ -127,7 +127,7 @@ TEST(MarkerSet, AppliedSetPutsMarkersWhereTheSetSays) {
 
 TEST(MarkerSet, KitSetReproducesTheModel) {
   const body::BodyModel base = body::mmm_body_model(1750);
-  const body::BodyModel model = body::apply_marker_set(base, cli::resolve_marker_set("kit"));
+  const body::BodyModel model = body::apply_marker_set(base, app::resolve_marker_set("kit"));
   ASSERT_EQ(model.marker_count(), base.marker_count());
   for (int m = 0; m < model.marker_count(); ++m) {
     EXPECT_EQ(model.markers[m].name, base.markers[m].name);
@@ -146,15 +146,15 @@ TEST(MarkerSet, KitSetReproducesTheModel) {
 TEST(MarkerSet, WarnsAboutSegmentsWithOneMarker) {
   const body::BodyModel base = body::mmm_body_model(1000);
   const std::vector<std::string> warnings =
-      body::marker_set_warnings(base, body::apply_marker_set(base, cli::resolve_marker_set("cmu")));
+      body::marker_set_warnings(base, body::apply_marker_set(base, app::resolve_marker_set("cmu")));
   bool lw = false;
   for (const auto& w : warnings) lw = lw || w.rfind("LW has 1 marker", 0) == 0;
   EXPECT_TRUE(lw);
 }
 
 TEST(MarkerSet, AutomaticChoiceFitsTheLab) {
-  const std::vector<body::MarkerSet> sets{cli::resolve_marker_set("kit"), cli::resolve_marker_set("cmu"),
-                                          cli::resolve_marker_set("plugin_gait")};
+  const std::vector<body::MarkerSet> sets{app::resolve_marker_set("kit"), app::resolve_marker_set("cmu"),
+                                          app::resolve_marker_set("plugin_gait")};
   EXPECT_EQ(body::choose_marker_set(labels_in_file("85_02.c3d"), sets), 1);
   EXPECT_EQ(body::choose_marker_set(labels_in_file("HDM_mm_01-02_03_120.c3d"), sets), 1);
   EXPECT_EQ(body::choose_marker_set(labels_in_file("PiG_Motion-FlatFoot-One.c3d"), sets), 2);
@@ -174,8 +174,8 @@ TEST(MarkerSet, AutomaticChoiceFitsTheLab) {
 }
 
 TEST(MarkerSet, JsonRoundTrip) {
-  const body::MarkerSet set = cli::resolve_marker_set("plugin_gait");
-  const body::MarkerSet again = cli::marker_set_from_json(cli::marker_set_to_json(set), "again");
+  const body::MarkerSet set = app::resolve_marker_set("plugin_gait");
+  const body::MarkerSet again = app::marker_set_from_json(app::marker_set_to_json(set), "again");
   const body::BodyModel base = body::mmm_body_model(1000);
   const body::BodyModel a = body::apply_marker_set(base, set), b = body::apply_marker_set(base, again);
   for (int m = 0; m < a.marker_count(); ++m) EXPECT_EQ(a.markers[m].offset, b.markers[m].offset);

@@ -6,7 +6,7 @@
 #include <s2kf/body/label_text.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
 
-#include "../../apps/s2kf/marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <gtest/gtest.h>
 
@@ -105,7 +105,7 @@ TEST(LabelNormalisation, SubjectPrefixWithoutSeparator) {
 TEST(LabelNormalisation, BundledSetsAcceptPrefixedRecordings) {
   // A Plug-in Gait recording of subject "L" without a colon: every marker found, the summary says how.
   const body::MarkerSet pig =
-      cli::load_marker_set(std::filesystem::path(S2KF_DATA_DIR) / "markersets" / "plugin_gait.json");
+      app::load_marker_set(std::filesystem::path(S2KF_DATA_DIR) / "markersets" / "plugin_gait.json");
   std::vector<std::string> labels;
   for (const std::string& label : pig.labels()) labels.push_back("L" + label);
   const body::MarkerMapping mapping = body::map_marker_set(labels, pig);

@@ -1,6 +1,6 @@
 // `s2kf calibrate`: writes a subject file that loads as a marker set and is taken back as
 // --markerset, and names an unknown set.
-#include "../../apps/s2kf/marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
@@ -32,7 +32,7 @@ TEST(CalibrateCommand, WritesASubjectFileThatLoads) {
       test_support::run_command("calibrate " + recording + " --frames 150 --iterations 1 --out " + subject);
   ASSERT_EQ(status, 0) << output;
   EXPECT_NE(output.find("marker set cmu"), std::string::npos) << output;
-  const body::MarkerSet set = cli::load_marker_set(subject);
+  const body::MarkerSet set = app::load_marker_set(subject);
   ASSERT_TRUE(set.height_mm.has_value());
   EXPECT_EQ(set.entries.size(), 41u);
   const body::BodyModel model =
@@ -51,7 +51,7 @@ TEST(CalibrateCommand, WritesASubjectFileThatLoads) {
   const auto [uniform_status, uniform_output] = test_support::run_command(
       "calibrate " + recording + " --frames 150 --quiet --uniform-noise --out " + uniform);
   ASSERT_EQ(uniform_status, 0) << uniform_output;
-  for (const body::MarkerSetEntry& entry : cli::load_marker_set(uniform).entries)
+  for (const body::MarkerSetEntry& entry : app::load_marker_set(uniform).entries)
     EXPECT_FALSE(entry.noise_mm.has_value()) << entry.label;
   // And the CLI takes it back as --markerset.
   const auto [again, again_output] =
@@ -79,7 +79,7 @@ TEST(CalibrateCommand, ShrinkOptionPullsTheOffsetsTowardsTheMarkerSet) {
         "calibrate " + recording + " --frames 150 --quiet " + options + " --out " + subject);
     EXPECT_EQ(status, 0) << output;
     std::ifstream report((dir / (name + "_report.json")).string());
-    return std::make_pair(cli::load_marker_set(subject), nlohmann::json::parse(report));
+    return std::make_pair(app::load_marker_set(subject), nlohmann::json::parse(report));
   };
   const auto [free_set, free_report] = calibrated("free", "--shrink 0");
   const auto [default_set, default_report] = calibrated("default", "");
@@ -126,7 +126,7 @@ TEST(CalibrateCommand, StaticTrialIsCalibratedInTheZeroPose) {
         test_support::run_command("calibrate " + recording + " --quiet " + options + " --out " + subject);
     EXPECT_EQ(status, 0) << output;
     std::ifstream report((dir / (name + "_report.json")).string());
-    return std::make_pair(cli::load_marker_set(subject), nlohmann::json::parse(report));
+    return std::make_pair(app::load_marker_set(subject), nlohmann::json::parse(report));
   };
   const auto [posed_set, posed_report] = calibrated("posed", "--static");
   const auto [free_set, free_report] = calibrated("free", "");
@@ -171,8 +171,8 @@ TEST(CalibrateCommand, TrackWithAStaticTrialCalibratesOnItFirst) {
       test_support::run_command("track " + walk + ".c3d --subject " + (dir / "subject.json").string() +
                                 common + (dir / "two").string());
   ASSERT_EQ(two, 0) << two_output;
-  const body::MarkerSet written = cli::load_marker_set(dir / "one_subject.json");
-  const body::MarkerSet calibrated = cli::load_marker_set(dir / "subject.json");
+  const body::MarkerSet written = app::load_marker_set(dir / "one_subject.json");
+  const body::MarkerSet calibrated = app::load_marker_set(dir / "subject.json");
   ASSERT_EQ(written.entries.size(), calibrated.entries.size());
   for (std::size_t m = 0; m < written.entries.size(); ++m)
     EXPECT_LT((written.entries[m].offset - calibrated.entries[m].offset).norm(), 1e-9) << m;

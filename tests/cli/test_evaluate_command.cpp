@@ -19,8 +19,8 @@
 #include <s2kf/evaluation/true_subject_reference.hpp>
 #include <s2kf/evaluation/truth_metrics.hpp>
 
-#include "../../apps/s2kf/marker_set_json.hpp"
-#include "../../apps/s2kf/motion_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
+#include <s2kf/app/motion_json.hpp>
 
 #include "cli_runner.hpp"
 
@@ -158,11 +158,11 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
   // The library's reference on the same subject and recording.
   const sim::SubjectOptions options;
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(options.height_mm), options, 2);
-  const cli::JointTable joints{subject.joint_names, subject.lower, subject.upper};
+  const app::JointTable joints{subject.joint_names, subject.lower, subject.upper};
   sim::RecordingOptions recording_options;
   recording_options.frames = 80;
   const sim::Recording recording = sim::simulate_recording(
-      cli::load_motion_file(data_file("motions/walk.json"), joints, 2), subject, recording_options, 2);
+      app::load_motion_file(data_file("motions/walk.json"), joints, 2), subject, recording_options, 2);
   const evaluation::TruthComparison expected =
       evaluation::compare_with_truth(subject.model, evaluation::true_subject_fit(subject, recording),
                                 sim::truth_motion(recording, subject.joint_names), 20);
@@ -211,7 +211,7 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
     SequenceFrameSource source(recording);
     pipeline::SessionOptions session_options;
     session_options.calibrate = false;
-    session = pipeline::prepare_session(source, cli::choose_marker_set_for(recording.labels, "", "").set,
+    session = pipeline::prepare_session(source, app::choose_marker_set_for(recording.labels, "", "").set,
                                      session_options, test::tracker_samples());
   }
   session.model = subject.model;

@@ -1,7 +1,7 @@
 // `s2kf markerset infer`: a set inferred for a recording with scrambled labels, written, used by
 // `s2kf track` when no bundled set fits, found again by `s2kf view`; one rigid object is refused and
 // nothing is written.
-#include "../../apps/s2kf/marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/io/c3d_reader.hpp>
@@ -40,7 +40,7 @@ TEST(MarkersetCommand, InfersWritesTracksAndViews) {
       test_support::run_command("markerset infer " + recording + " --out " + set_file);
   ASSERT_EQ(status, 0) << output;
   EXPECT_NE(output.find("confidence"), std::string::npos) << output;
-  const body::MarkerSet set = cli::load_marker_set(set_file);
+  const body::MarkerSet set = app::load_marker_set(set_file);
   EXPECT_EQ(set.entries.size(), labels.size());
   EXPECT_NE(set.description.find("Inferred"), std::string::npos);
 

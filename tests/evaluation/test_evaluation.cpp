@@ -17,7 +17,7 @@
 #include <s2kf/evaluation/true_subject_reference.hpp>
 #include <s2kf/evaluation/truth_metrics.hpp>
 
-#include "../../apps/s2kf/motion_json.hpp"
+#include <s2kf/app/motion_json.hpp>
 #include "test_files.hpp"
 
 #include "tracked_recording.hpp"
@@ -47,8 +47,8 @@ constexpr double kDegrees = 180.0 / 3.14159265358979323846;
 /// tissue or noise): the markers are the model's markers at the truth.
 sim::Recording exact_handstand(Eigen::Index frames, double height_mm) {
   const body::BodyModel reference = body::mmm_body_model(1000);
-  const cli::JointTable joints{reference.joint_names(), reference.lower_limits(), reference.upper_limits()};
-  const sim::KeyframeMotion motion = cli::load_motion_file(data_file("motions/handstand.json"), joints, 1);
+  const app::JointTable joints{reference.joint_names(), reference.lower_limits(), reference.upper_limits()};
+  const sim::KeyframeMotion motion = app::load_motion_file(data_file("motions/handstand.json"), joints, 1);
   sim::SubjectOptions subject_options;
   subject_options.height_mm = height_mm;
   subject_options.segment_scale_sd = subject_options.placement_sd_mm = 0;

@@ -6,7 +6,7 @@
 #include "test_files.hpp"
 #include "tracker_samples.hpp"
 
-#include "../../apps/s2kf/marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>

@@ -5,7 +5,7 @@
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
 
-#include "../../apps/s2kf/motion_json.hpp"
+#include <s2kf/app/motion_json.hpp>
 
 #include <gtest/gtest.h>
 
@@ -20,13 +20,13 @@ namespace {
 using namespace s2kf;
 using namespace s2kf::sim;
 
-cli::JointTable model_joints() {
+app::JointTable model_joints() {
   const body::BodyModel model = body::mmm_body_model(1000);
   return {model.joint_names(), model.lower_limits(), model.upper_limits()};
 }
 
 KeyframeMotion bundled_motion(const std::string& name, std::uint64_t seed = 1) {
-  return cli::load_motion_file(std::string(S2KF_DATA_DIR) + "/motions/" + name + ".json", model_joints(),
+  return app::load_motion_file(std::string(S2KF_DATA_DIR) + "/motions/" + name + ".json", model_joints(),
                                seed);
 }
 
@@ -185,7 +185,7 @@ TEST(Recording, HiddenMarkersAreNaNAndPlannedLossesHideWhatTheySay) {
 // Every bundled motion stays within the joint limits in every frame, moves at a human speed, and
 // the handstand has the paper's 675 frames.
 TEST(BundledMotions, StayWithinTheJointLimitsAtEveryFrameAndMovePlausibly) {
-  const cli::JointTable joints = model_joints();
+  const app::JointTable joints = model_joints();
   for (const char* name : {"handstand", "walk", "squats", "jumping_jacks", "arm_circles", "cartwheel",
                            "forward_roll", "random_sweep", "static", "dance"}) {
     const KeyframeMotion motion = bundled_motion(name);
@@ -214,7 +214,7 @@ TEST(BundledMotions, StayWithinTheJointLimitsAtEveryFrameAndMovePlausibly) {
 // The dance is the bundled motion whose axial rotations move (the others keep them at 0): every
 // twist of the trunk, the humeri, the forearms and the hips sweeps tens of degrees.
 TEST(BundledMotions, TheDanceTurnsEveryTwist) {
-  const cli::JointTable joints = model_joints();
+  const app::JointTable joints = model_joints();
   const KeyframeMotion motion = bundled_motion("dance");
   const InterpolatedMotion trajectory(motion);
   for (const auto& [name, least_range_deg] : std::vector<std::pair<std::string, double>>{
@@ -231,9 +231,9 @@ TEST(BundledMotions, TheDanceTurnsEveryTwist) {
 }
 
 TEST(MotionJson, RejectsUnknownJointsUnitsAndLimitViolations) {
-  const cli::JointTable joints = model_joints();
+  const app::JointTable joints = model_joints();
   const auto parse = [&](const char* text) {
-    return cli::motion_from_json(nlohmann::json::parse(text), joints, 1, "test.json");
+    return app::motion_from_json(nlohmann::json::parse(text), joints, 1, "test.json");
   };
   EXPECT_NO_THROW(parse(
       R"({"units": "deg", "keyframes": [{"time": 0, "root_position": [0, 0, 530], "joints": {"LKx": -30}}]})"));

@@ -3,7 +3,7 @@
 // accuracy against the truth. Partial sets: the joints no marker informs are written as not
 // observed (NaN), reported with the reason, and carry a large posterior uncertainty; a recording
 // that shows nothing but the pelvis is refused.
-#include "../../apps/s2kf/marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
@@ -107,7 +107,7 @@ SetTracked track_simulated(const SetRecording& s, const body::MarkerSet& set) {
 /// right of it at the zero pose, and no marker is further than 300 mm (at 1000 mm height) from the
 /// joint centre of its segment (a marker on the wrong segment would be).
 TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
-  const std::vector<std::string> names = cli::bundled_marker_set_names();
+  const std::vector<std::string> names = app::bundled_marker_set_names();
   for (const char* expected :
        {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation", "qualisys_sports",
         "plugin_gait_lower", "plugin_gait_upper", "kit", "cmu", "plugin_gait"})
@@ -116,7 +116,7 @@ TEST(BundledMarkerSets, EachLoadsAndMapsOntoTheModel) {
   const body::FrameTransforms zero = body::joint_frames(
       base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::VectorXd::Zero(base.joint_count()));
   for (const std::string& name : names) {
-    const body::MarkerSet set = cli::resolve_marker_set(name);
+    const body::MarkerSet set = app::resolve_marker_set(name);
     EXPECT_NE(set.description.find("Source: "), std::string::npos)
         << name << ": the description names no source";
     const body::BodyModel model = body::apply_marker_set(base, set);
@@ -149,7 +149,7 @@ TEST(BundledMarkerSets, EachTracksASimulatedRecordingOfItsOwnMarkers) {
   S2KF_SKIP_UNDER_SANITIZERS();
   for (const char* name : {"anatomical_landmarks", "optitrack_baseline", "qualisys_animation",
                            "qualisys_sports", "plugin_gait"}) {
-    const body::MarkerSet set = cli::resolve_marker_set(name);
+    const body::MarkerSet set = app::resolve_marker_set(name);
     const SetRecording s = simulate_with(set, 5);
     const SetTracked t = track_simulated(s, set);
     EXPECT_EQ(t.session.markers_used(), static_cast<int>(set.entries.size())) << name;
@@ -165,10 +165,10 @@ TEST(BundledMarkerSets, EachTracksASimulatedRecordingOfItsOwnMarkers) {
 }
 
 TEST(PartialMarkerSets, LowerBodyRecordingWritesTheUpperBodyAsNotObserved) {
-  const body::MarkerSet set = cli::resolve_marker_set("plugin_gait_lower");
+  const body::MarkerSet set = app::resolve_marker_set("plugin_gait_lower");
   const SetRecording s = simulate_with(set, 9);
   // The automatic choice takes the lower-body set, not the full one it is half of.
-  const std::vector<body::MarkerSet> sets{cli::resolve_marker_set("plugin_gait"), set};
+  const std::vector<body::MarkerSet> sets{app::resolve_marker_set("plugin_gait"), set};
   EXPECT_EQ(body::choose_marker_set(s.recording.labels, sets), 1);
   const SetTracked t = track_simulated(s, set);
   EXPECT_EQ(t.session.segments.unobserved_segments(),
@@ -204,7 +204,7 @@ TEST(PartialMarkerSets, LowerBodyRecordingWritesTheUpperBodyAsNotObserved) {
 
 TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const body::MarkerSet set = cli::resolve_marker_set("plugin_gait_upper");
+  const body::MarkerSet set = app::resolve_marker_set("plugin_gait_upper");
   const SetRecording s = simulate_with(set, 13);
   const SetTracked t = track_simulated(s, set);
   EXPECT_EQ(t.session.segments.unobserved_segments(),
@@ -221,7 +221,7 @@ TEST(PartialMarkerSets, UpperBodyRecordingWritesTheLegsAsNotObserved) {
 
 TEST(PartialMarkerSets, CountsFramesWithoutAVisibleMarkerPerSegment) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const body::MarkerSet set = cli::resolve_marker_set("plugin_gait_lower");
+  const body::MarkerSet set = app::resolve_marker_set("plugin_gait_lower");
   const SetRecording s = simulate_with(set, 21, {sim::SegmentDropout{"LA", 1.0, 0.5}});
   const SetTracked t = track_simulated(s, set);
   const track::SegmentObservation& seen = t.run.segments;

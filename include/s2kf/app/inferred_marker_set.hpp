@@ -5,9 +5,9 @@
 /// enough of a recording's labels.
 #pragma once
 
-#include "command.hpp"
-#include "marker_set_json.hpp"
-#include "tracker_samples.hpp"
+#include <s2kf/app/marker_set_json.hpp>
+#include <s2kf/app/sample_sets.hpp>
+#include <s2kf/app/user_error.hpp>
 
 #include <s2kf/body/marker_set_labels.hpp>
 #include <s2kf/io/atomic_file.hpp>
@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 /// Samples of the inference's rounds of tracking: enough to place markers, faster than the
 /// default 301.
@@ -28,7 +28,7 @@ inline constexpr int kInferenceSamples = 101;
 /// 0-2, or -1 to find it. Throws UserError with one sentence when the recording cannot be read or
 /// its markers cannot be placed unambiguously.
 inline markerset::InferredMarkerSet infer_marker_set_file(const std::string& input, const std::string& out,
-                                                      int up_axis) {
+                                                          int up_axis) {
   MarkerSequence recording;
   try {
     recording = c3d::read_c3d(input);
@@ -101,4 +101,4 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
   return choice;
 }
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

@@ -6,9 +6,9 @@
 
 #include <s2kf/core/sample_set.hpp>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 /// The cached LCD sample set of `count` samples for `dimension` dimensions.
 SampleSet cached_sample_set(int dimension, int count);
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

@@ -1,5 +1,5 @@
 // The summary of one tracked recording: its JSON object and the paragraph the program prints.
-#include "track_summary.hpp"
+#include <s2kf/app/track_summary.hpp>
 
 #include <cmath>
 #include <iomanip>
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 nlohmann::json number_or_null(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
@@ -188,4 +188,4 @@ std::string track_paragraph(const nlohmann::json& summary, const std::string& na
   return paragraph.str();
 }
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

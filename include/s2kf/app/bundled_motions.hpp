@@ -3,7 +3,8 @@
 /// and `s2kf evaluate --motion` share.
 #pragma once
 
-#include "command.hpp"
+#include <s2kf/app/data_directory.hpp>
+#include <s2kf/app/user_error.hpp>
 
 #include <s2kf/sim/occlusion.hpp>
 
@@ -16,17 +17,7 @@
 #include <utility>
 #include <vector>
 
-namespace s2kf::cli {
-
-inline std::filesystem::path data_directory() {
-  if (const char* from_environment = std::getenv("S2KF_DATA_DIR"); from_environment && *from_environment)
-    return from_environment;
-#ifdef S2KF_DATA_DIR
-  return S2KF_DATA_DIR;
-#else
-  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / "data";
-#endif
-}
+namespace s2kf::app {
 
 inline std::filesystem::path motions_directory() { return data_directory() / "motions"; }
 
@@ -76,4 +67,4 @@ inline sim::RandomOcclusion occlusion_option(const std::string& text) {
   return {p, lambda};
 }
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

@@ -1,19 +1,17 @@
 /// @file
-/// The output formats of `s2kf track` and `s2kf calibrate` (issue 18): the --formats, --bvh-units and
-/// --derivatives options, the motion file paths they select, and the files written beside the motion:
+/// The output formats of a tracked recording (`s2kf track --formats`, `--bvh-units`, `--derivatives`):
+/// the motion file paths they select, and the files written beside the motion:
 /// the OpenSim model (.osim) and the recorded markers (.trc), committed with the motion files.
 #pragma once
 
-#include "command.hpp"
+#include <s2kf/app/user_error.hpp>
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
 #include <s2kf/io/opensim_model.hpp>
 #include <s2kf/io/trc_file.hpp>
-#include <s2kf/body/marker_mapping.hpp>
-
-#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <filesystem>
@@ -24,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 /// What `--formats`, `--bvh-units` and `--derivatives` chose.
 struct OutputSettings {
@@ -41,28 +39,6 @@ struct OutputSettings {
 inline const std::vector<std::string>& known_output_formats() {
   static const std::vector<std::string> formats{"csv", "mot", "bvh", "osim", "trc", "mmm"};
   return formats;
-}
-
-/// --mass: the subject's body mass, which the .osim's segment masses and inertias (de Leva) scale with.
-inline void add_mass_option(CLI::App& app, double& body_mass_kg) {
-  app.add_option("--mass", body_mass_kg,
-                 "body mass in kg for the OpenSim model's segment masses and inertias (de Leva 1996; "
-                 "default: 24.1 kg/m^2 times the height squared)")
-      ->check(CLI::Range(1.0, 500.0));
-}
-
-/// Registers the output options on a command.
-inline void add_output_options(CLI::App& app, OutputSettings& settings) {
-  app.add_option("--formats", settings.formats,
-                 "files to write, comma-separated: csv, mot (OpenSim motion), bvh, osim (OpenSim model), trc "
-                 "(markers for OpenSim), mmm (MMM XML) (default: all)")
-      ->delimiter(',')
-      ->check(CLI::IsMember(known_output_formats()));
-  app.add_option("--bvh-units", settings.bvh_units, "BVH length unit: m (Blender's default) or cm")
-      ->check(CLI::IsMember({"m", "cm"}));
-  app.add_flag("--derivatives", settings.derivatives,
-               "also write PREFIX_vel.csv and PREFIX_acc.csv (finite differences of the motion)");
-  add_mass_option(app, settings.body_mass_kg);
 }
 
 /// The motion files MotionStreamWriter writes for `prefix`.
@@ -190,4 +166,4 @@ inline std::string written_files_sentence(const std::string& prefix, const Outpu
   return s.str();
 }
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

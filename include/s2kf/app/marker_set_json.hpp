@@ -1,10 +1,10 @@
 /// @file
 /// Marker-set files (data/markersets/<name>.json, schema in docs/real-data.md) to and from
 /// s2kf::body::MarkerSet, and the choice of the set for a recording (`--markerset`, `--subject`,
-/// automatic). JSON stays out of the library, so this lives with the CLI.
+/// automatic). JSON stays out of the tracking library, so this lives in the application layer.
 #pragma once
 
-#include "command.hpp"
+#include <s2kf/app/user_error.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 /// Parses a marker-set document; throws std::invalid_argument with a sentence naming `source` and
 /// the entry. Only the form is checked here; validate_marker_set checks it against the model.
@@ -71,4 +71,4 @@ body::MarkerSet subject_marker_set(const body::MarkerSet& original, const body::
                                    const std::map<std::string, double>& segment_scale,
                                    const std::vector<double>& marker_noise_mm, const std::string& name);
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

@@ -1,7 +1,7 @@
 // A subject estimated from one recording (calibrated_subject.hpp).
-#include "calibrated_subject.hpp"
+#include <s2kf/app/calibrated_subject.hpp>
 
-#include "track_summary.hpp"  // fixed_text
+#include <s2kf/app/track_summary.hpp>  // fixed_text
 
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
@@ -12,7 +12,7 @@
 #include <memory>
 #include <stdexcept>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 CalibratedSubject calibrate_subject(FrameSource& source, const std::string& input,
                                     const SubjectSettings& settings, const SampleSet& samples,
@@ -85,4 +85,4 @@ nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::
   return document;
 }
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

@@ -5,8 +5,8 @@
 #pragma once
 
 #include <s2kf/io/number_text.hpp>
-#include <s2kf/track/segment_observation.hpp>
 #include <s2kf/pipeline/session.hpp>
+#include <s2kf/track/segment_observation.hpp>
 
 #include <Eigen/Core>
 
@@ -15,7 +15,7 @@
 #include <limits>
 #include <ostream>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 /// PREFIX_markers.csv: its header, and one line per frame.
 inline void write_marker_report_header(std::ostream& out) {
@@ -59,4 +59,4 @@ inline void write_segment_report_row(std::ostream& out, const pipeline::Session&
   out << "\n";
 }
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

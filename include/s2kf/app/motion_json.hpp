@@ -1,6 +1,7 @@
 /// @file
 /// Reading a motion file (data/motions/<name>.json) into an s2kf::sim::KeyframeMotion. The schema
-/// is documented in docs/simulation.md; JSON stays out of the library, so this lives with the CLI.
+/// is documented in docs/simulation.md; JSON stays out of the tracking library, so this lives in the
+/// application layer.
 #pragma once
 
 #include <s2kf/core/constants.hpp>
@@ -19,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 /// Joint names, order and limits the motion files are checked against.
 struct JointTable {
@@ -128,4 +129,4 @@ inline sim::KeyframeMotion load_motion_file(const std::filesystem::path& path, c
   return motion_from_json(document, joints, seed, path.string());
 }
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

@@ -4,7 +4,7 @@
 /// the marker set a subject file holds.
 #pragma once
 
-#include "marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
@@ -17,7 +17,7 @@
 #include <thread>
 #include <vector>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 /// The options of `s2kf calibrate` (and of `s2kf track --static`, which calibrates in the zero pose).
 struct SubjectSettings {
@@ -68,4 +68,4 @@ nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::
 /// Writes a subject file's document to `path`, completely or not at all.
 void write_subject_file(const std::string& path, const nlohmann::json& document);
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

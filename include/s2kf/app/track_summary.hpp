@@ -4,11 +4,11 @@
 /// from the same numbers.
 #pragma once
 
-#include "marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 nlohmann::json number_or_null(double value);
 
@@ -48,4 +48,4 @@ nlohmann::json truth_json(const evaluation::TruthComparison& t);
 /// height, calibration, convergence, latency, smoothing, pacing, the truth and the warnings.
 std::string track_paragraph(const nlohmann::json& summary, const std::string& name);
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

@@ -1,5 +1,7 @@
 // Marker sets as JSON: reading, writing, finding the bundled ones and choosing one for a recording.
-#include "marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
+
+#include <s2kf/app/data_directory.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -13,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace s2kf::cli {
+namespace s2kf::app {
 
 namespace {
 
@@ -146,15 +148,7 @@ body::MarkerSet load_marker_set(const std::filesystem::path& path) {
   }
 }
 
-std::filesystem::path marker_set_directory() {
-  if (const char* from_environment = std::getenv("S2KF_DATA_DIR"); from_environment && *from_environment)
-    return std::filesystem::path(from_environment) / "markersets";
-#ifdef S2KF_DATA_DIR
-  return std::filesystem::path(S2KF_DATA_DIR) / "markersets";
-#else
-  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / "data" / "markersets";
-#endif
-}
+std::filesystem::path marker_set_directory() { return data_directory() / "markersets"; }
 
 std::vector<std::string> bundled_marker_set_names() {
   std::vector<std::string> names;
@@ -262,4 +256,4 @@ body::MarkerSet subject_marker_set(const body::MarkerSet& original, const body::
   return set;
 }
 
-}  // namespace s2kf::cli
+}  // namespace s2kf::app

@@ -1,0 +1,122 @@
+/// @file
+/// One tracking request, whatever the front end: every option of `s2kf track` that decides the
+/// numbers (marker set, subject, calibration, tracker, smoothing, truth) with its default, its
+/// checks, and the steps from a recording to a tracked motion and its summary. `s2kf track` and the
+/// Python module's `s2kf.track`, `s2kf.Tracker` and `s2kf.calibrate` are adapters over it.
+#pragma once
+
+#include <s2kf/app/calibrated_subject.hpp>
+#include <s2kf/app/marker_set_json.hpp>
+
+#include <s2kf/calibration/subject_calibration.hpp>
+#include <s2kf/core/sample_set.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/io/motion_files.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/track/stage_times.hpp>
+#include <s2kf/track/tracking_run.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace s2kf::app {
+
+/// The default tracker options (the "default" preset), for the defaults below.
+inline const track::TrackerOptions kDefaultTracker{};
+
+/// How messages name the options: as the program's options ("--static-sd") or as Python's
+/// keywords ("static_sd").
+enum class OptionNames { program, python };
+
+struct TrackRequest {
+  // The marker set: at most one of markerset, subject, static_trial.
+  std::string markerset;       ///< a bundled set's name or a .json file; empty: the best bundled match
+  std::string subject;         ///< a calibrated subject file (`s2kf calibrate`)
+  std::string static_trial;    ///< a C3D static trial in the zero pose: the subject is calibrated on it first
+  double static_sd_deg = 3.0;  ///< how far (SD, degrees) each joint may be from the zero pose there
+  double height_mm = 0;        ///< 0: the marker set's, else estimated from rigid marker pairs
+  // The subject's calibration on the recording itself (not with a subject or static trial).
+  bool calibrate = true;
+  long calibration_frames = 1200;  ///< frames used, in stretches spread over the recording
+  int calibration_samples = 0;     ///< samples of the calibration's tracking pass; 0: `samples`
+  double calibration_shrink = calibration::CalibrationOptions{}.weak_direction_shrink;
+  bool uniform_noise = false;   ///< every marker the same noise (else each its calibration residual's)
+  int calibration_threads = 0;  ///< 0: every core (one recording); a batch gives 1 per recording
+  // The tracker.
+  int samples = kDefaultTracker.samples;     ///< S2KF sample count L
+  std::string preset = "default";            ///< or "paper" (the seed paper's noise, for comparison)
+  std::string motion_model = "random-walk";  ///< or "constant-velocity"
+  std::string gain = "information-form";     ///< or "square-root" (the exact update)
+  std::string method = "s2kf";               ///< or "baseline" (per-frame Levenberg-Marquardt)
+  bool smooth = false;                       ///< offline Rauch-Tung-Striebel smoothing
+  /// Memory smoothing may take (it keeps every frame's posterior) before a recording is refused.
+  double smoothing_memory_limit_bytes = 8e9;
+  std::string truth;  ///< a ground-truth motion CSV (s2kf simulate's _truth.csv): accuracy in the summary
+  OptionNames names = OptionNames::program;  ///< not an option: the front end's spelling in messages
+};
+
+/// `dashed` ("static-sd") as the request's front end spells it: "--static-sd" or "static_sd".
+std::string option_name(const TrackRequest& request, const std::string& dashed);
+
+/// Frames left out of the accuracy against the truth (the filter's start-up).
+inline constexpr long kTruthWarmupFrames = 20;
+
+/// Throws UserError with one sentence naming the option when the request is out of range or
+/// contradicts itself (what can be told without the recording). Options are named as the program
+/// names them; Python's keywords are the same names with underscores.
+void check_request(const TrackRequest& request);
+
+/// The recording a request is applied to, besides its frames.
+struct RecordingDescription {
+  std::string input;                       ///< names the recording in messages and the summary
+  std::vector<std::string> raw_labels;     ///< one per point (model outputs keep their names), or empty
+  std::vector<std::string> file_warnings;  ///< the reader's
+  /// A C3D file's path and where a marker set inferred from it is written when no bundled set fits
+  /// the labels (PREFIX_markerset.json); empty: no inference, the best bundled set or an error.
+  std::string inferred_markerset_path;
+};
+
+/// A recording prepared for tracking: the marker set and why, the session (model, mapping,
+/// height, calibration), the samples, the truth, and what to tell the user so far.
+struct PreparedTrack {
+  std::string input;  ///< names the recording in messages and the summary
+  MarkerSetChoice choice;
+  pipeline::Session session;
+  SampleSet samples;
+  std::vector<std::string> messages;  ///< which marker set and why, labels ignored
+  std::vector<std::string> warnings;  ///< the file's and the session's (the run adds its own)
+  std::optional<io::MotionTable> truth;
+};
+
+/// The tracker options a request asks for at `rate_hz` (preset, samples, motion model, gain).
+track::TrackerOptions tracker_options(const TrackRequest& request, double rate_hz);
+
+/// The session options a request asks for (the tracker's, height, calibration).
+pipeline::SessionOptions session_options(const TrackRequest& request, double rate_hz);
+
+/// Checks the recording against the request (frames, rate, smoothing memory, truth), chooses the
+/// marker set (calibrating on the static trial first when asked), and prepares the session.
+/// Throws UserError naming the recording.
+PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& recording,
+                            const TrackRequest& request);
+
+/// Runs the prepared session over every frame (rows to `hooks.sink` when set, else kept in the
+/// run's motion table); refuses a run that tracked nothing or only predicted.
+track::TrackingRun run_track(PreparedTrack& prepared, FrameSource& source, const TrackRequest& request,
+                             const pipeline::RunHooks& hooks = {});
+
+/// The summary of a run (PREFIX.json of `s2kf track`, `TrackResult.summary` in Python). With a
+/// truth, the accuracy of `motion` (the run's motion as written or kept) against it.
+nlohmann::json summarize_track(const PreparedTrack& prepared, const track::TrackingRun& run,
+                               const TrackRequest& request, const io::MotionTable* motion = nullptr,
+                               const track::StageTimes& outside = {});
+
+/// The subject calibrated on the request's static trial in the model's zero pose (as `s2kf
+/// calibrate --static`), named `name`, with every core.
+CalibratedSubject calibrate_static_trial(const TrackRequest& request, const SampleSet& samples,
+                                         const std::string& name);
+
+}  // namespace s2kf::app

@@ -1,0 +1,102 @@
+"""s2kf.track and `s2kf track` are two front ends of one tracking request (include/s2kf/app/
+track_request.hpp): every option of the program is a keyword of s2kf.track (dashes as underscores)
+with the same default, but for the program's own options listed below; and both give the same
+numbers on a bundled recording."""
+import re
+import subprocess
+
+import numpy as np
+import s2kf
+
+# Options only the program has, and why.
+PROGRAM_ONLY = {
+    # files: Python returns a TrackResult and writes with its write()/to_* methods
+    "out", "formats", "bvh_units", "derivatives", "mass", "figure", "html",
+    # a batch of recordings: Python calls track() per recording
+    "jobs", "shard", "dry_run",
+    # printing and pacing on a terminal
+    "quiet", "verbose", "realtime",
+    "help",
+}
+
+
+def program_options(cli_path):
+    """{keyword: default text or None} from `s2kf track --help`; a flag `--x` reads as x=False and a
+    negated flag `--no-x` as x=True (Python keeps the positive name)."""
+    text = subprocess.run([cli_path, "track", "--help"], capture_output=True, text=True, check=True).stdout
+    options = {}
+    for line in text.splitlines():
+        m = re.match(r"^\s+(?:-\w,)?(--[a-z][a-z0-9-]*)(.*)$", line)
+        if not m:
+            continue
+        name, rest = m.group(1)[2:], m.group(2)
+        column = re.split(r"\s{2,}", rest.strip())[0] if rest.strip() else ""  # type and default
+        is_flag = column == "" or not re.match(r"^[A-Z]", column)
+        default = re.findall(r"\[([^\]]*)\]\s*$", column)
+        if is_flag:
+            key, value = (name[3:], True) if name.startswith("no-") else (name, False)
+        else:
+            key, value = name, (default[0] if default else None)
+        options[key.replace("-", "_")] = value
+    return options
+
+
+def same_default(program, python):
+    if isinstance(program, bool) or python is None or isinstance(python, bool):
+        return program == python or (program is None and python in (None, ""))
+    if isinstance(python, (int, float)):
+        return program is not None and float(program) == float(python)
+    return program == python
+
+
+def test_every_program_option_is_a_keyword_with_the_same_default(cli):
+    cli_path = cli.path
+    options = program_options(cli_path)
+    assert {"samples", "gain", "calibrate", "uniform_noise", "smooth", "out"} <= options.keys(), options
+    python = python_keywords()
+    missing = sorted(k for k in options if k not in PROGRAM_ONLY and k not in python)
+    assert not missing, f"s2kf track options without an s2kf.track keyword: {missing}"
+    different = {k: (options[k], python[k]) for k in options
+                 if k not in PROGRAM_ONLY and not same_default(options[k], python[k])}
+    assert not different, f"defaults differ (program, Python): {different}"
+    stale = sorted(k for k in PROGRAM_ONLY - {"help"} if k not in options)
+    assert not stale, f"listed as program-only but not options of s2kf track: {stale}"
+
+
+def python_keywords():
+    """{keyword: default} of s2kf.track, read from its pybind11 signature line."""
+    signature = s2kf.track.__doc__.splitlines()[0]
+    keywords = {}
+    for name, value in re.findall(r"(\w+): [^=,()]+(?:\[[^\]]*\])? = ([^,)]+)", signature):
+        value = value.strip()
+        if value == "None":
+            keywords[name] = None
+        elif value in ("True", "False"):
+            keywords[name] = value == "True"
+        elif re.match(r"^-?[\d.e+-]+$", value):
+            keywords[name] = float(value)
+        else:
+            keywords[name] = value.strip("'")
+    keywords["static"] = None  # `static` is a keyword of Python
+    return keywords
+
+
+def test_the_parser_fails_on_a_missing_keyword_or_default():
+    """The comparison above must be able to fail."""
+    assert not same_default("301", 101)
+    assert not same_default("information-form", "square-root")
+    assert not same_default(False, True)
+    assert same_default(None, None) and same_default("0.03", 0.03) and same_default(True, True)
+
+
+def test_both_give_the_same_joint_angles_on_the_walk(cli, tmp_path, data_dir):
+    walk = data_dir / "walk.c3d"
+    cli("track", walk, "--out", tmp_path / "cli", "--quiet", "--formats", "csv")
+    result = s2kf.track(str(walk))
+    result.to_csv(str(tmp_path / "py.csv"))
+    ours = np.genfromtxt(tmp_path / "py.csv", delimiter=",", names=True)
+    theirs = np.genfromtxt(tmp_path / "cli.csv", delimiter=",", names=True)
+    assert ours.dtype.names == theirs.dtype.names and len(ours) == len(theirs) == 551
+    for column in ours.dtype.names[8:]:  # the 40 joint angles (after frame, time and the root)
+        np.testing.assert_allclose(ours[column], theirs[column], rtol=0, atol=1e-9, err_msg=column)
+    assert np.isfinite(result.joints[100:]).all()

@@ -1,0 +1,254 @@
+// One tracking request from a recording to a tracked motion and its summary (app/track_request.hpp).
+#include <s2kf/app/track_request.hpp>
+
+#include <s2kf/app/calibrated_subject.hpp>
+#include <s2kf/app/inferred_marker_set.hpp>
+#include <s2kf/app/sample_sets.hpp>
+#include <s2kf/app/track_summary.hpp>
+#include <s2kf/app/user_error.hpp>
+
+#include <s2kf/evaluation/truth_metrics.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/track/tracking_smoother.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <initializer_list>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+namespace s2kf::app {
+namespace {
+
+/// `value` as few digits as say it ("1750", "0.5").
+std::string number_text(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+bool one_of(const std::string& value, std::initializer_list<const char*> allowed) {
+  return std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return value == a; });
+}
+
+/// "'x' or 'y'" as the front end quotes values.
+std::string choices(std::initializer_list<const char*> allowed) {
+  std::string text;
+  std::size_t i = 0;
+  for (const char* a : allowed) {
+    text += (i == 0 ? "" : i + 1 == allowed.size() ? " or " : ", ") + std::string("'") + a + "'";
+    ++i;
+  }
+  return text;
+}
+
+}  // namespace
+
+std::string option_name(const TrackRequest& request, const std::string& dashed) {
+  if (request.names == OptionNames::program) return "--" + dashed;
+  std::string name = dashed;
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+}
+
+void check_request(const TrackRequest& r) {
+  const auto name = [&](const std::string& dashed) { return option_name(r, dashed); };
+  if (r.samples < 3 || r.samples > 100001)
+    throw UserError(name("samples") + " must lie between 3 and 100001, got " + std::to_string(r.samples));
+  if (r.calibration_samples != 0 && (r.calibration_samples < 3 || r.calibration_samples > 100001))
+    throw UserError(name("calibration-samples") + " must lie between 3 and 100001 (or be 0: " +
+                    name("samples") + "), got " + std::to_string(r.calibration_samples));
+  if (r.height_mm != 0 && !(r.height_mm >= 300 && r.height_mm <= 3000))
+    throw UserError(name("height") + " must lie between 300 and 3000 mm (or be 0: estimated), got " +
+                    number_text(r.height_mm));
+  if (!(r.static_sd_deg >= 0.1 && r.static_sd_deg <= 90.0))
+    throw UserError(name("static-sd") + " must lie between 0.1 and 90 degrees");
+  if (r.calibration_frames < 10 || r.calibration_frames > 10000000)
+    throw UserError(name("calibration-frames") + " must lie between 10 and 10000000");
+  if (!(r.calibration_shrink >= 0 && r.calibration_shrink <= 1e6))
+    throw UserError(name("calibration-shrink") + " must lie in [0, 1e6]");
+  if (!one_of(r.preset, {"default", "paper"}))
+    throw UserError("unknown preset '" + r.preset + "' (use " + choices({"default", "paper"}) + ")");
+  if (!one_of(r.motion_model, {"random-walk", "constant-velocity"}))
+    throw UserError("unknown motion model '" + r.motion_model + "' (use " +
+                    choices({"random-walk", "constant-velocity"}) + ")");
+  if (r.gain == "information-form-root-products")
+    throw UserError(
+        "the gain 'information-form-root-products' was removed: on every measured accuracy against a truth "
+        "'square-root' (the exact update) is as good or better at about the same speed; use "
+        "'square-root', or the default 'information-form'");
+  if (!one_of(r.gain, {"information-form", "square-root"}))
+    throw UserError("unknown gain '" + r.gain + "' (use " + choices({"information-form", "square-root"}) +
+                    ")");
+  if (!one_of(r.method, {"s2kf", "baseline"}))
+    throw UserError(name("method") + " must be 's2kf' or 'baseline', not '" + r.method + "'");
+  if (r.smooth && r.method != "s2kf")
+    throw UserError(name("smooth") + " works on the S2KF's estimates; it cannot be combined with " +
+                    (r.names == OptionNames::program ? "--method baseline" : "method='baseline'"));
+  if (!(r.smoothing_memory_limit_bytes > 0))
+    throw UserError("the smoothing memory limit must be a positive number of bytes");
+  if (!r.markerset.empty() && !r.subject.empty())
+    throw UserError("give " + name("markerset") + " or " + name("subject") +
+                    ", not both (a subject file is a calibrated marker set)");
+  if (!r.static_trial.empty() && !r.subject.empty())
+    throw UserError("give " + name("static") + " or " + name("subject") + ", not both (" + name("static") +
+                    " calibrates the subject on the static trial)");
+  if (!r.static_trial.empty() && !r.calibrate)
+    throw UserError(name("static") +
+                    " calibrates the subject on the static trial; it cannot be combined with " +
+                    (r.names == OptionNames::program ? "--no-calibrate" : "calibrate=False"));
+}
+
+track::TrackerOptions tracker_options(const TrackRequest& request, double rate_hz) {
+  track::TrackerOptions options;
+  try {
+    options = track::preset_options(request.preset, rate_hz);
+  } catch (const std::invalid_argument& e) {
+    throw UserError(e.what());
+  }
+  options.samples = request.samples;
+  options.motion_model = track::motion_model_from_name(request.motion_model);
+  track::set_gain_from_name(options, request.gain);
+  return options;
+}
+
+pipeline::SessionOptions session_options(const TrackRequest& request, double rate_hz) {
+  pipeline::SessionOptions options;
+  options.tracker = tracker_options(request, rate_hz);
+  options.height_mm = request.height_mm;
+  options.calibrate = request.calibrate && request.subject.empty() && request.static_trial.empty();
+  options.calibration_frames = request.calibration_frames;
+  options.calibration.weak_direction_shrink = request.calibration_shrink;
+  options.calibration.threads = request.calibration_threads > 0 ? request.calibration_threads : every_core();
+  options.noise_from_calibration = !request.uniform_noise;
+  return options;
+}
+
+PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& recording,
+                            const TrackRequest& request) {
+  check_request(request);
+  const std::string& input = recording.input;
+  const std::int64_t frames = source.frame_count();
+  if (frames == 0) throw UserError(input + ": the recording holds no complete frame");
+  PreparedTrack prepared;
+  prepared.input = input;
+  const std::string truth_option = option_name(request, "truth");
+  // Ground truth, read before tracking so a wrong file fails fast.
+  if (!request.truth.empty()) {
+    try {
+      prepared.truth = io::load_motion_csv(request.truth);
+    } catch (const std::exception& e) {
+      throw UserError(truth_option + ": " + e.what());
+    }
+    if (prepared.truth->frames() != frames)
+      throw UserError(truth_option + ": " + request.truth + " has " +
+                      std::to_string(prepared.truth->frames()) + " rows, but " + input + " has " +
+                      std::to_string(frames) + " frames");
+  }
+  const bool with_rates = request.motion_model == "constant-velocity";
+  const double smoothing_bytes =
+      static_cast<double>(frames) * static_cast<double>(track::TrackingSmoother::bytes_per_frame(with_rates));
+  if (request.smooth && smoothing_bytes > request.smoothing_memory_limit_bytes)
+    throw UserError(input + ": " + std::to_string(frames) + " frames are too many to smooth in memory (" +
+                    fixed_text(smoothing_bytes / 1e9, 1) + " GB); track without " +
+                    option_name(request, "smooth") + ", or split the recording");
+
+  pipeline::SessionOptions options = session_options(request, source.rate_hz());
+  prepared.samples = cached_sample_set(46, request.samples);
+  if (!request.static_trial.empty()) {
+    // The subject calibrated on the static trial in the model's zero pose (`s2kf calibrate
+    // --static`), then the recording tracked with it as with a subject file.
+    const CalibratedSubject calibrated = calibrate_static_trial(
+        request, prepared.samples, std::filesystem::path(input).stem().string() + "_subject");
+    prepared.choice.set = calibrated.subject;
+    prepared.choice.source = "calibrated on the static trial " + request.static_trial;
+  } else if (!recording.inferred_markerset_path.empty()) {
+    prepared.choice = choose_or_infer_marker_set(input, source.labels(), request.markerset, request.subject,
+                                                 recording.inferred_markerset_path);
+  } else {
+    prepared.choice = choose_marker_set_for(source.labels(), request.markerset, request.subject);
+  }
+  if (options.calibrate && request.calibration_samples > 0 && request.calibration_samples != request.samples)
+    options.calibration_samples = cached_sample_set(46, request.calibration_samples);
+  pipeline::Session& session = prepared.session;
+  try {
+    session = pipeline::prepare_session(source, prepared.choice.set, options, prepared.samples);
+  } catch (const std::invalid_argument& e) {
+    throw UserError(input + ": " + e.what());
+  }
+  if (prepared.truth && prepared.truth->joint_names != session.model.joint_names())
+    throw UserError(
+        truth_option + ": " + request.truth + " does not have the " +
+        std::to_string(session.model.joint_count()) +
+        " joint columns of the body model (write it with s2kf simulate, whose _truth.csv has them)");
+  // Model outputs never match a marker; the summary lists each under its own name in the file.
+  // The ignored labels are in point order, one per unmatched point, "" for every model output.
+  std::vector<std::string> output_names;
+  for (std::size_t p = 0; p < recording.raw_labels.size() && p < source.labels().size(); ++p)
+    if (source.labels()[p].empty()) output_names.push_back(recording.raw_labels[p]);
+  std::size_t next_output = 0;
+  for (std::string& label : session.mapping.ignored_labels)
+    if (label.empty() && next_output < output_names.size()) label = output_names[next_output++];
+  prepared.warnings = recording.file_warnings;
+  prepared.warnings.insert(prepared.warnings.end(), session.warnings.begin(), session.warnings.end());
+  prepared.messages = marker_set_messages(prepared.choice, session.mapping);
+  return prepared;
+}
+
+track::TrackingRun run_track(PreparedTrack& prepared, FrameSource& source, const TrackRequest& request,
+                             const pipeline::RunHooks& hooks) {
+  pipeline::RunOptions run_options;
+  run_options.method = request.method == "s2kf" ? pipeline::Method::s2kf : pipeline::Method::baseline;
+  run_options.smooth = request.smooth;
+  track::TrackingRun run;
+  const pipeline::Session& session = prepared.session;
+  try {
+    run = pipeline::run_session(session, source, prepared.samples, run_options, hooks);
+  } catch (const std::invalid_argument& e) {
+    throw UserError(prepared.input + ": " + e.what());
+  }
+  if (run.frames_tracked == 0)
+    throw UserError(prepared.input + ": no frame has the " +
+                    std::to_string(session.tracker.min_markers_to_start) +
+                    " visible markers needed to start tracking");
+  if (2 * run.frames_prediction_only > run.frames_tracked)
+    throw UserError(prepared.input + ": the filter's update failed in " +
+                    std::to_string(run.frames_prediction_only) + " of " + std::to_string(run.frames_tracked) +
+                    " tracked frames, which only repeat its prediction; no result is written (" +
+                    (run.warnings.empty() ? std::string("see the header and labels") : run.warnings.front()) +
+                    ")");
+  prepared.warnings.insert(prepared.warnings.end(), run.warnings.begin(), run.warnings.end());
+  return run;
+}
+
+nlohmann::json summarize_track(const PreparedTrack& prepared, const track::TrackingRun& run,
+                               const TrackRequest& request, const io::MotionTable* motion,
+                               const track::StageTimes& outside) {
+  nlohmann::json summary =
+      track_summary(prepared.input, request.method, prepared.choice, prepared.messages, prepared.session, run,
+                    request.smooth, prepared.warnings, request.calibration_shrink, outside);
+  if (prepared.truth) {
+    // Accuracy from the frames after the filter's start-up.
+    std::optional<evaluation::TruthComparison> accuracy;
+    try {
+      accuracy = evaluation::compare_with_truth(prepared.session.model, motion ? *motion : run.motion,
+                                                *prepared.truth, kTruthWarmupFrames);
+    } catch (const std::invalid_argument& e) {
+      throw UserError(option_name(request, "truth") + ": " + request.truth + ": " + e.what());
+    }
+    summary["truth"] = truth_json(*accuracy);
+    summary["truth"]["warmup_frames"] = kTruthWarmupFrames;
+  }
+  return summary;
+}
+
+CalibratedSubject calibrate_static_trial(const TrackRequest& request, const SampleSet& samples,
+                                         const std::string& name) {
+  return calibrate_subject_file(request.static_trial, option_name(request, "static"),
+                                static_trial_settings(request.markerset, request.height_mm,
+                                                      !request.uniform_noise, request.static_sd_deg),
+                                samples, name);
+}
+
+}  // namespace s2kf::app
