@@ -20,25 +20,37 @@ PROGRAM_ONLY = {
 }
 
 
+# One option line of CLI11's help: "  --samples INT:INT in [3 - 100001]=301", "  --gain TEXT=information-form",
+# "  --markerset TEXT" (no default), "  --smooth" (a flag), "  --no-calibrate{false}" (a negated flag).
+OPTION = re.compile(r"^\s+(?:-\w,)?--(?P<name>[a-z][a-z0-9-]*)(?P<negated>\{false\})?"
+                    r"(?: (?P<type>[A-Z]+(?::\{[^}]*\}|:[A-Z]+(?: in \[[^\]]*\])?)?)(?:=(?P<default>\S*))?)?")
+
+
 def program_options(cli_path):
-    """{keyword: default text or None} from `s2kf track --help`; a flag `--x` reads as x=False and a
-    negated flag `--no-x` as x=True (Python keeps the positive name)."""
+    """{keyword: default text, None when none, or a bool for a flag} from `s2kf track --help`; a flag
+    `--x` reads as x=False and a negated flag `--no-x` as x=True (Python keeps the positive name)."""
     text = subprocess.run([cli_path, "track", "--help"], capture_output=True, text=True, check=True).stdout
     options = {}
     for line in text.splitlines():
-        m = re.match(r"^\s+(?:-\w,)?(--[a-z][a-z0-9-]*)(.*)$", line)
+        m = OPTION.match(line)
         if not m:
             continue
-        name, rest = m.group(1)[2:], m.group(2)
-        column = re.split(r"\s{2,}", rest.strip())[0] if rest.strip() else ""  # type and default
-        is_flag = column == "" or not re.match(r"^[A-Z]", column)
-        default = re.findall(r"\[([^\]]*)\]\s*$", column)
-        if is_flag:
+        name = m.group("name")
+        if m.group("type") is None:  # a flag
             key, value = (name[3:], True) if name.startswith("no-") else (name, False)
         else:
-            key, value = name, (default[0] if default else None)
+            key, value = name, m.group("default")
         options[key.replace("-", "_")] = value
     return options
+
+
+def test_the_help_is_read_as_written():
+    """The parser above on the forms CLI11 writes (a parser that reads nothing would pass the test below)."""
+    assert OPTION.match("  --height FLOAT:FLOAT in [300 - 3000]=0").group("default") == "0"
+    assert OPTION.match("  --preset TEXT:{default,paper}=default").group("default") == "default"
+    assert OPTION.match("  --figure INT:NONNEGATIVE=-1 draw frame").group("default") == "-1"
+    assert OPTION.match("  --markerset TEXT            bundled").group("default") is None
+    assert OPTION.match("  --no-calibrate{false}       track").group("type") is None
 
 
 def same_default(program, python):
