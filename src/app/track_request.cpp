@@ -75,9 +75,9 @@ void check_request(const TrackRequest& r) {
                     choices({"random-walk", "constant-velocity"}) + ")");
   if (r.gain == "information-form-root-products")
     throw UserError(
-        "the gain 'information-form-root-products' was removed: on every measured accuracy against a truth "
-        "'square-root' (the exact update) is as good or better at about the same speed; use "
-        "'square-root', or the default 'information-form'");
+        "the gain 'information-form-root-products' was removed: no measurement showed it the best choice for "
+        "any case (docs/tracking.md, the gain); use 'square-root' (the exact update) or the default "
+        "'information-form'");
   if (!one_of(r.gain, {"information-form", "square-root"}))
     throw UserError("unknown gain '" + r.gain + "' (use " + choices({"information-form", "square-root"}) +
                     ")");
