@@ -22,7 +22,12 @@ class QtmClient {
   QtmClient(const std::string& host, std::uint16_t port, double timeout_s = 5)
       : channel_(connect_tcp(host, port, timeout_s)) {
     const int timeout_ms = static_cast<int>(timeout_s * 1000);
-    if (channel_.read(timeout_ms) != PacketChannel::Read::packet)
+    const PacketChannel::Read welcome = channel_.read(timeout_ms);
+    // Closed before the welcome: a server going away (its last queued connection), not a malformed one.
+    if (welcome == PacketChannel::Read::closed)
+      throw ConnectionError("the server at " + host + ":" + std::to_string(port) +
+                            " closed the connection before its welcome");
+    if (welcome != PacketChannel::Read::packet)
       throw ProtocolError("the server at " + host + ":" + std::to_string(port) + " sent no welcome");
     if (channel_.header().type == PacketType::error)
       throw ProtocolError("the server refused the connection: " + channel_.text());
