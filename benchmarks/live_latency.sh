@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Latency of `s2kf live` over loopback: `s2kf serve` streams a recording (looped) at 100, 300 and
-# 1000 Hz and `s2kf live` tracks it with a calibrated subject, sending every pose out as a JSON line
+# Latency of `s2kf live` over loopback: `s2kf serve` streams a simulated walk (50 markers, as long
+# as the run, so the stream never jumps back to its start as a looped recording does) at 100, 300
+# and 1000 Hz and `s2kf live` tracks it with a subject calibrated on it, sending every pose out as a JSON line
 # over UDP; each run's summary gives the time from a frame's arrival to its pose going out (median,
 # p99, max), the frames over the deadline (one frame period), the frames dropped while busy (and of
 # them, before the first pose), the tracker's own median time per frame and the most memory the
@@ -14,14 +15,17 @@ shift $(( $# > 2 ? 2 : $# ))
 rates=("$@")
 [ ${#rates[@]} -gt 0 ] || rates=(100 300 1000)
 s2kf=$build/s2kf
-recording=data/walk.c3d
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-"$s2kf" calibrate "$recording" --frames 150 --iterations 1 --quiet --out "$work/subject.json"
 printf '%-6s %8s %10s %9s %9s %8s %9s %9s %10s %9s\n' rate frames median_ms p99_ms max_ms misses dropped preparing step_ms rss_mb
 for rate in "${rates[@]}"; do
   rm -f "$work/port"
-  "$s2kf" serve "$recording" --port 0 --port-file "$work/port" --rate "$rate" --loop --quiet &
+  recording=$work/walk_$rate.c3d
+  # Two seconds more than the run: the client's connection and the end of the run are not exact.
+  "$s2kf" simulate --motion walk --rate "$rate" --frames $(( (seconds + 2) * rate )) --seed 1 \
+    --out "$recording" >/dev/null
+  "$s2kf" calibrate "$recording" --frames 150 --iterations 1 --quiet --out "$work/subject.json"
+  "$s2kf" serve "$recording" --port 0 --port-file "$work/port" --rate "$rate" --quiet &
   server=$!
   for _ in $(seq 100); do [ -s "$work/port" ] && break; sleep 0.05; done
   /usr/bin/time -f %M -o "$work/rss" "$s2kf" live "127.0.0.1:$(cat "$work/port")" --subject "$work/subject.json" \

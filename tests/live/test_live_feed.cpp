@@ -237,6 +237,35 @@ TEST(LiveFeed, SlowConsumerKeepsTheNewestWithinTheBacklog) {
   EXPECT_EQ(feed.counts().dropped, 97);
 }
 
+TEST(LiveFeed, FramesArrivingWhileTheHeldStretchIsTrackedAreKept) {
+  // A consumer that holds 60 frames is 60 behind once it starts: the 40 that arrive meanwhile are
+  // kept, though the backlog is 10 (enough for the consumer's hiccups while it holds them).
+  const MarkerSequence sequence = numbered_frames(100, 5, 500);
+  ServerThread server(sequence, {});
+  LiveFeed feed("127.0.0.1", server.port(), quiet_feed(10));
+  LiveFrameSource source(feed, {});
+  ASSERT_EQ(source.hold_first(60).frame_count(), 60);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the whole recording has been sent
+  const std::vector<MarkerFrame> frames = read_all(source);
+  ASSERT_EQ(frames.size(), 100u);
+  for (std::size_t f = 0; f < frames.size(); ++f) EXPECT_EQ(frames[f].positions(1, 0), static_cast<double>(f));
+  EXPECT_EQ(feed.counts().dropped, 0);
+}
+
+TEST(LiveFeed, OnceCaughtUpOnlyTheBacklogIsKept) {
+  const MarkerSequence sequence = numbered_frames(400, 5, 400);
+  ServerThread server(sequence, {});
+  LiveFeed feed("127.0.0.1", server.port(), quiet_feed(3));
+  LiveFrameSource source(feed, {});
+  ASSERT_EQ(source.hold_first(40).frame_count(), 40);
+  MarkerFrame frame;
+  for (std::int64_t f = 0; f < 60; ++f) ASSERT_TRUE(source.read(f, frame));  // live, caught up
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // about 120 frames arrive
+  for (std::int64_t f = 60; source.read(f, frame); ++f) {
+  }
+  EXPECT_GT(feed.counts().dropped, 50);
+}
+
 TEST(QtmServer, AnswersCommandsAsQtmDoes) {
   const MarkerSequence sequence = numbered_frames(10);
   ServerThread server(sequence, {});

@@ -55,6 +55,7 @@ class LiveFeed {
   LiveFeed(std::string host, std::uint16_t port, FeedOptions options)
       : host_(std::move(host)), port_(port), options_(std::move(options)) {
     options_.backlog = std::max<std::size_t>(1, options_.backlog);
+    limit_ = options_.backlog;
     client_ = std::make_unique<QtmClient>(host_, port_, options_.connect_timeout_s);
     parameters_ = client_->parameters();
     current_labels_ = parameters_.labels;
@@ -82,7 +83,20 @@ class LiveFeed {
     if (backlog_.empty()) return Next::ended;
     out = std::move(backlog_.front());
     backlog_.pop_front();
+    // Catching up: the allowance shrinks with each frame taken, so that a consumer slower than the
+    // stream comes back to the backlog's bound; once caught up, the bound is the backlog again.
+    if (limit_ > options_.backlog) --limit_;
+    if (backlog_.empty()) limit_ = options_.backlog;
     return Next::frame;
+  }
+
+  /// Keeps up to `frames` (not only the backlog) until the consumer has caught up, i.e. emptied
+  /// the backlog: after a held first stretch the consumer is that far behind by design, and
+  /// frames dropped then would be lost for nothing. The allowance shrinks by one with each frame
+  /// taken, so a consumer that never catches up is back to the backlog after `frames` frames.
+  void keep_until_caught_up(std::size_t frames) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    limit_ = std::max(options_.backlog, frames);
   }
 
   /// Ends the stream (says "Bye" to the server) and the receiving thread.
@@ -180,7 +194,7 @@ class LiveFeed {
     }
     std::lock_guard<std::mutex> lock(mutex_);
     ++counts_.received;
-    if (backlog_.size() >= options_.backlog) {
+    if (backlog_.size() >= limit_) {
       backlog_.pop_front();
       ++counts_.dropped;
     }
@@ -275,6 +289,7 @@ class LiveFeed {
   mutable std::mutex mutex_;
   std::condition_variable arrived_;
   std::deque<LiveFrame> backlog_;
+  std::size_t limit_ = 1;  ///< the backlog's bound now: options_.backlog, more while catching up
   bool stopping_ = false;
   bool ended_ = false;
   bool failed_ = false;

@@ -39,7 +39,8 @@ class LiveFrameSource : public FrameSource {
   std::int64_t frame_count() const override { return next_; }
 
   /// Holds the next `count` frames in memory (fewer when the stream ends first) and returns them:
-  /// the stretch the session is prepared on; read() delivers them first.
+  /// the stretch the session is prepared on; read() delivers them first. Until the consumer has
+  /// caught up with the stream, the feed keeps up to `count` new frames (LiveFeed::keep_until_caught_up).
   const MarkerSequence& hold_first(std::int64_t count) {
     first_.labels = labels_;
     first_.rate_hz = rate_hz();
@@ -48,6 +49,7 @@ class LiveFrameSource : public FrameSource {
     holding_ = true;
     while (static_cast<std::int64_t>(frames.size()) < count && next_live(frame)) frames.push_back(frame);
     holding_ = false;
+    feed_.keep_until_caught_up(static_cast<std::size_t>(std::max<std::int64_t>(0, count)));
     first_.resize(static_cast<std::int64_t>(frames.size()));
     for (std::size_t f = 0; f < frames.size(); ++f)
       first_.set_frame(static_cast<std::int64_t>(f), frames[f].positions, frames[f].visible);
