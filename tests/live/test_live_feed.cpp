@@ -248,7 +248,8 @@ TEST(LiveFeed, FramesArrivingWhileTheHeldStretchIsTrackedAreKept) {
   std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the whole recording has been sent
   const std::vector<MarkerFrame> frames = read_all(source);
   ASSERT_EQ(frames.size(), 100u);
-  for (std::size_t f = 0; f < frames.size(); ++f) EXPECT_EQ(frames[f].positions(1, 0), static_cast<double>(f));
+  for (std::size_t f = 0; f < frames.size(); ++f)
+    EXPECT_EQ(frames[f].positions(1, 0), static_cast<double>(f));
   EXPECT_EQ(feed.counts().dropped, 0);
 }
 
@@ -260,7 +261,7 @@ TEST(LiveFeed, OnceCaughtUpOnlyTheBacklogIsKept) {
   ASSERT_EQ(source.hold_first(40).frame_count(), 40);
   MarkerFrame frame;
   for (std::int64_t f = 0; f < 60; ++f) ASSERT_TRUE(source.read(f, frame));  // live, caught up
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // about 120 frames arrive
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));               // about 120 frames arrive
   for (std::int64_t f = 60; source.read(f, frame); ++f) {
   }
   EXPECT_GT(feed.counts().dropped, 50);
