@@ -32,7 +32,7 @@ unset S2KF_DATA_DIR PYTHONPATH
 # S2KF_PIP_TEST_OPTIMISATION= (empty) builds the wheel exactly as a user's `pip install .` does.
 optimisation=${S2KF_PIP_TEST_OPTIMISATION--O1}
 config=()
-[ -z "$optimisation" ] || config=(-C "cmake.define.CMAKE_CXX_FLAGS_RELEASE=$optimisation -DNDEBUG")
+[ -z "$optimisation" ] || config=("--config-settings=cmake.define.CMAKE_CXX_FLAGS_RELEASE=$optimisation -DNDEBUG")
 start=$(date +%s)
 (cd "$work/elsewhere" && "$work/venv/bin/python" -m pip install --disable-pip-version-check -q "${config[@]}" "$source_dir")
 echo "pip install: $(($(date +%s) - start)) s"
