@@ -29,12 +29,13 @@ if [ "${1:-}" = "--sanitize" ]; then
          -DS2KF_BUILD_BENCHMARKS=OFF "${unity[@]}")
 fi
 # Beyond the build packages, the tests use: pybind11 and numpy/pytest (the Python module), xmllint
-# (the OpenSim model's well-formedness), blender (the BVH import test), chromium (the viewer test),
+# (the OpenSim model's well-formedness), blender (the BVH import test), chromium (the viewer tests),
+# liblo-tools (oscdump, the OSC receiver of the s2kf live test),
 # python3-venv for the test environment of PyPI packages (OpenSim, biorbd, ezc3d: tests/tools,
 # python/tests), and slurm-wlm and munge (the Slurm job array of docs/batch.md, on a one-node cluster
 # the test starts).
 scripts/install-deps.sh pybind11-dev python3-dev python3-numpy python3-pytest libxml2-utils blender chromium \
-  python3-venv slurm-wlm munge
+  liblo-tools python3-venv slurm-wlm munge
 # Absolute but not resolved: the venv's python is a symlink to the system's, and only the venv's
 # own path makes Python use the venv's packages.
 test_python=$(scripts/python-env.sh)

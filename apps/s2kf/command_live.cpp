@@ -1,12 +1,16 @@
 // `s2kf live HOST[:PORT]`: track a motion capture system's stream (the QTM real-time protocol) as
-// it arrives, with the tracker `s2kf track` uses, sending every pose out over UDP as it is made,
-// and write the same files as `s2kf track` when the stream ends.
+// it arrives, with the tracker `s2kf track` uses, sending every pose out as it is made (JSON lines
+// or OSC over UDP, the live view in a browser), and write the same files as `s2kf track` when the
+// stream ends.
 #include <s2kf/app/calibrated_subject.hpp>
-#include "command.hpp"
-#include "output_options.hpp"
-#include "interruption.hpp"
-#include "track_file.hpp"
 #include <s2kf/app/track_summary.hpp>
+#include "command.hpp"
+#include "interruption.hpp"
+#include "live_view.hpp"
+#include "osc_message.hpp"
+#include "output_options.hpp"
+#include "track_file.hpp"
+#include "viewer/page_writer.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/pose.hpp>
@@ -43,6 +47,10 @@ struct LiveSettings {
   double reconnect_seconds = 10;
   double max_gap_seconds = 1;
   std::string udp_json;  // HOST:PORT
+  std::string osc;       // HOST:PORT
+  bool view = false;     // --view given
+  int view_port = 0;     // 0: the system chooses
+  std::string view_address = "127.0.0.1";
 };
 
 /// HOST, HOST:PORT, [IPv6]:PORT.
@@ -88,6 +96,30 @@ std::string pose_message(const track::TrackedFrame& row, const std::vector<std::
   return out.str();
 }
 
+/// The UDP output of `option` (HOST:PORT), none when not given.
+std::optional<live::UdpSender> udp_output(const std::string& option, const std::string& address) {
+  std::optional<live::UdpSender> sender;
+  if (address.empty()) return sender;
+  const auto [host, port] = split_address(address, 0);
+  if (port == 0) throw UserError(option + " needs HOST:PORT");
+  try {
+    sender.emplace(host, port);
+  } catch (const live::ConnectionError& e) {
+    throw UserError(option + ": " + e.what());
+  }
+  return sender;
+}
+
+/// The live view's metadata: the page's (docs/viewer.md) for the session's model, marked live,
+/// with the frames its plots keep (10 s).
+std::string live_view_metadata(const viewer::PageData& layout, const body::BodyModel& model,
+                               const std::string& name, double rate) {
+  nlohmann::json meta = viewer::page_metadata(layout, model, name, rate, nlohmann::json::object());
+  meta["live"] = true;
+  meta["live_window_frames"] = std::max<long>(1, std::lround(10 * rate));
+  return meta.dump();
+}
+
 void run_live(LiveSettings settings) {
   TrackSettings& track = settings.track;
   if (!track.request.markerset.empty() && !track.request.subject.empty())
@@ -96,15 +128,13 @@ void run_live(LiveSettings settings) {
   const std::string name = host + ":" + std::to_string(port);
   const std::string prefix = track.out.empty() ? "live" : track.out;
   check_outputs(track.outputs, {prefix}, false);
-  std::optional<live::UdpSender> udp;
-  if (!settings.udp_json.empty()) {
-    const auto [udp_host, udp_port] = split_address(settings.udp_json, 0);
-    if (udp_port == 0) throw UserError("--udp-json needs HOST:PORT");
-    try {
-      udp.emplace(udp_host, udp_port);
-    } catch (const live::ConnectionError& e) {
-      throw UserError(std::string("--udp-json: ") + e.what());
-    }
+  std::optional<live::UdpSender> udp = udp_output("--udp-json", settings.udp_json);
+  std::optional<live::UdpSender> osc = udp_output("--osc", settings.osc);
+  std::unique_ptr<LiveView> view;
+  if (settings.view) {
+    view =
+        std::make_unique<LiveView>(settings.view_address, settings.view_port, viewer::live_viewer_page(name));
+    std::cout << "s2kf live: the live view is at " << view->url() << std::endl;
   }
 
   let_first_signal_end_stream();
@@ -135,7 +165,8 @@ void run_live(LiveSettings settings) {
   live::LiveFrameSource source(*feed, source_options);
   // The session is prepared on a first stretch: a calibrated subject needs one second (the height
   // check), a calibration --calibration-seconds.
-  const double first_seconds = track.request.subject.empty() && track.request.calibrate ? settings.calibration_seconds : 1.0;
+  const double first_seconds =
+      track.request.subject.empty() && track.request.calibrate ? settings.calibration_seconds : 1.0;
   const auto first_frames = std::max<std::int64_t>(1, std::llround(first_seconds * rate));
   if (!track.quiet && track.request.subject.empty() && track.request.calibrate)
     std::cerr << "s2kf live: calibrating the subject on the first " << first_frames << " frames" << std::endl;
@@ -162,9 +193,33 @@ void run_live(LiveSettings settings) {
   const double period_ms = 1000.0 / rate;
   TrackHooks hooks;
   long dropped_preparing = -1;  // frames dropped before the first row: while the session was prepared
+  // The live view draws each row with the session's model and the frame as read.
+  const pipeline::Session* session = nullptr;
+  viewer::PageData layout;
+  MarkerFrame last_read;
+  last_read.index = -1;
+  hooks.on_prepared = [&](const pipeline::Session& prepared) {
+    session = &prepared;
+    if (!view) return;
+    layout = viewer::page_layout(prepared.model, prepared.mapping, false);
+    view->set_metadata(live_view_metadata(layout, prepared.model, name, rate));
+  };
+  hooks.on_read = [&](const MarkerFrame& frame) {
+    if (view && view->watched()) last_read = frame;
+  };
   hooks.on_row = [&](const track::TrackedFrame& row) {
     if (dropped_preparing < 0) dropped_preparing = feed->counts().dropped;
     if (udp) udp->send(pose_message(row, columns));
+    if (osc) {
+      const std::vector<char> message = osc_pose_message(row);
+      osc->send(message.data(), message.size());
+    }
+    if (view && session && last_read.index == row.frame && view->watched()) {
+      std::string record;
+      viewer::append_record(layout, session->model, session->mapping, static_cast<double>(row.frame),
+                            row.time, row.values, last_read, record);
+      view->publish(viewer::base64_encode(record));
+    }
     if (row.frame == source.last_arrival_index()) {
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - source.last_arrival())
@@ -200,6 +255,14 @@ void run_live(LiveSettings settings) {
         {"deadline_misses", deadline_misses}};
     if (udp)
       live["udp_json"] = {{"address", settings.udp_json}, {"sent", udp->sent()}, {"dropped", udp->dropped()}};
+    if (osc) live["osc"] = {{"address", settings.osc}, {"sent", osc->sent()}, {"dropped", osc->dropped()}};
+    if (view) {
+      const LiveView::Counts counts = view->counts();
+      live["view"] = {{"address", view->url()},
+                      {"browsers", counts.browsers},
+                      {"frames_sent", counts.sent},
+                      {"frames_skipped", counts.skipped}};
+    }
     summary["live"] = live;
   };
   if (fs::path(prefix).has_parent_path()) fs::create_directories(fs::path(prefix).parent_path());
@@ -207,6 +270,7 @@ void run_live(LiveSettings settings) {
   const bool failed = feed->failed();
   const std::string why = feed->ended_reason();
   feed->stop();
+  if (view) view->finish(outcome.summary["live"]["end"].get<std::string>());
   if (!track.quiet) {
     std::cout << outcome.paragraph << "\n";
     const nlohmann::json& live = outcome.summary["live"];
@@ -235,7 +299,8 @@ const RegisterCommand live_registration{
       app.add_option("--calibration-seconds", settings->calibration_seconds,
                      "calibrate the subject on this first stretch of the stream (default 10)")
           ->check(CLI::Range(0.1, 3600.0));
-      app.add_flag("!--no-calibrate", track.request.calibrate, "track with the marker set's subject as it is");
+      app.add_flag("!--no-calibrate", track.request.calibrate,
+                   "track with the marker set's subject as it is");
       app.add_option("--height", track.request.height_mm, "body height in mm (default: estimated)")
           ->check(CLI::Range(300.0, 3000.0));
       app.add_option("--samples", track.request.samples, "S2KF sample count (default 301)")
@@ -256,9 +321,21 @@ const RegisterCommand live_registration{
           ->check(CLI::Range(0.0, 60.0));
       app.add_option("--udp-json", settings->udp_json,
                      "send every pose as one JSON line to HOST:PORT over UDP");
+      app.add_option("--osc", settings->osc,
+                     "send every pose as one OSC message /s2kf/pose to HOST:PORT over UDP");
+      CLI::Option* view =
+          app.add_option("--view", settings->view_port,
+                         "serve the live view in a browser on this port (default: one the system chooses)")
+              ->expected(0, 1)
+              ->check(CLI::Range(0, 65535));
+      app.add_option("--view-address", settings->view_address,
+                     "the address the live view listens on (default 127.0.0.1, this machine only)");
       app.add_flag("--quiet", track.quiet, "print nothing but errors");
       add_output_options(app, track.outputs);
-      app.callback([settings] { run_live(*settings); });
+      app.callback([settings, view] {
+        settings->view = view->count() > 0;
+        run_live(*settings);
+      });
     }};
 
 }  // namespace

@@ -102,6 +102,7 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
   recording.inferred_markerset_path = prefix + "_markerset.json";
   app::PreparedTrack prepared = app::prepare_track(*input.prepare, recording, settings.request);
   const pipeline::Session& session = prepared.session;
+  if (extra.on_prepared) extra.on_prepared(session);
 
   const auto start = std::chrono::steady_clock::now();
   const double frame_period = 1.0 / input.rate_hz;

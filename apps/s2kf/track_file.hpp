@@ -55,9 +55,10 @@ struct TrackInput {
   double open_seconds = 0;  ///< spent opening the source (the summary's read stage)
 };
 
-/// What a caller adds to a run: each frame as read, each row after it went to the files, and the
-/// summary before it is written.
+/// What a caller adds to a run: the prepared session (its model and marker mapping), each frame as
+/// read, each row after it went to the files, and the summary before it is written.
 struct TrackHooks {
+  std::function<void(const pipeline::Session&)> on_prepared;
   std::function<void(const MarkerFrame&)> on_read;
   std::function<void(const track::TrackedFrame&)> on_row;
   std::function<void(nlohmann::json&)> on_summary;

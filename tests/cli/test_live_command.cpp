@@ -1,6 +1,7 @@
 // `s2kf live` against `s2kf serve` over loopback: the same joint angles as `s2kf track` on the same
 // file with the same subject, the faults of a stream, and a refused connection.
 #include "address_sanitizer.hpp"
+#include "child_process.hpp"
 #include "cli_runner.hpp"
 #include "test_files.hpp"
 
@@ -20,6 +21,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -31,35 +33,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace s2kf::test_support;
 
-/// `s2kf serve RECORDING --port 0 OPTIONS` as a child process, ended with the test.
-class Server {
- public:
-  Server(const std::string& recording, const fs::path& dir, const std::vector<std::string>& options = {}) {
-    const fs::path port_file = dir / "port";
-    fs::remove(port_file);
-    std::vector<std::string> arguments{S2KF_CLI, "serve",   recording,     "--port",
-                                       "0",      "--quiet", "--port-file", port_file.string()};
-    arguments.insert(arguments.end(), options.begin(), options.end());
-    std::vector<char*> argv;
-    for (std::string& a : arguments) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    EXPECT_EQ(posix_spawn(&pid_, S2KF_CLI, nullptr, nullptr, argv.data(), environ), 0);
-    for (int wait = 0; wait < 300 && !fs::exists(port_file); ++wait)
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    std::ifstream(port_file) >> port_;
-    EXPECT_GT(port_, 0) << "the server did not start";
-  }
-  ~Server() {
-    kill(pid_, SIGTERM);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-  }
-  std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
-
- private:
-  pid_t pid_ = 0;
-  int port_ = 0;
-};
+using Server = ServeProcess;
 
 /// A subject calibrated on walk.c3d (so that live and track run the same filter), made once.
 std::string walk_subject() {
@@ -157,6 +131,74 @@ TEST(LiveCommand, EveryPoseGoesOutAsAJsonLineOverUdp) {
     }
   }
   EXPECT_EQ(summary_of(live)["live"]["udp_json"]["sent"], 60);
+}
+
+/// The arguments of the messages oscdump printed for `address` ("TIMETAG ADDRESS TYPES ARGS..."),
+/// with their type tags.
+std::vector<std::pair<std::string, std::vector<std::string>>> oscdump_messages(const std::string& text,
+                                                                               const std::string& address) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> messages;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::string timetag, path, types;
+    words >> timetag >> path >> types;
+    if (path != address) continue;
+    std::vector<std::string> arguments;
+    for (std::string word; words >> word;) arguments.push_back(word);
+    messages.emplace_back(types, arguments);
+  }
+  return messages;
+}
+
+TEST(LiveCommand, EveryPoseGoesOutAsAnOscMessageThatOscdumpReads) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  if (std::system("command -v oscdump > /dev/null") != 0)
+    GTEST_SKIP() << "oscdump not found (Debian: apt-get install liblo-tools)";
+  const fs::path dir = empty_scratch("live_osc");
+  const int port = free_udp_port();
+  ChildProcess oscdump({"oscdump", "-L", std::to_string(port)}, dir / "oscdump.txt");
+  // oscdump listens once a probe sent to it comes out.
+  ASSERT_TRUE(oscdump.wait_for_output(
+      [&](const std::string& out) {
+        std::system(("oscsend 127.0.0.1 " + std::to_string(port) + " /probe i 1").c_str());
+        return out.find("/probe") != std::string::npos;
+      },
+      5))
+      << oscdump.output();
+  Server server(data_file("walk.c3d"), dir);
+  const std::string live = (dir / "live").string();
+  const CommandResult r = run_command("live " + server.address() + " --subject " + walk_subject() +
+                                      " --frames 60 --backlog 100000 --formats csv --quiet --osc 127.0.0.1:" +
+                                      std::to_string(port) + " --out " + live);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto count = [](const std::string& out) { return oscdump_messages(out, "/s2kf/pose").size(); };
+  oscdump.wait_for_output([&](const std::string& out) { return count(out) >= 60; }, 5);
+  const auto messages = oscdump_messages(oscdump.output(), "/s2kf/pose");
+  ASSERT_EQ(messages.size(), 60u) << oscdump.output().substr(0, 2000);
+  const auto rows = csv_rows(read_text(live + ".csv"));
+  ASSERT_EQ(rows.size(), 61u);
+  ASSERT_EQ(rows[0].size(), 48u);  // frame, time, 6 root values, 40 joints
+  // oscdump prints float32 values with 6 decimals: the CSV's values to float precision and that.
+  const auto near = [](const std::string& printed, double expected) {
+    const double value = std::strtod(printed.c_str(), nullptr);
+    if (std::isnan(expected)) return std::isnan(value);
+    return std::abs(value - expected) <= 6e-7 + 1.2e-7 * std::abs(expected);
+  };
+  for (std::size_t f = 0; f < messages.size(); ++f) {
+    const auto& [types, arguments] = messages[f];
+    ASSERT_EQ(types, "iif" + std::string(46, 'f'));
+    ASSERT_EQ(arguments.size(), 49u);
+    EXPECT_EQ(arguments[0], std::to_string(f));
+    EXPECT_TRUE(near(arguments[1], 0.01 * static_cast<double>(f))) << arguments[1];
+    EXPECT_GT(std::stoi(arguments[2]), 40) << "visible markers";
+    for (std::size_t c = 2; c < rows[0].size(); ++c)
+      EXPECT_TRUE(near(arguments[c + 1], std::strtod(rows[f + 1][c].c_str(), nullptr)))
+          << "frame " << f << " " << rows[0][c] << ": OSC " << arguments[c + 1] << ", CSV " << rows[f + 1][c];
+  }
+  const nlohmann::json summary = summary_of(live);
+  EXPECT_EQ(summary["live"]["osc"]["sent"], 60);
+  EXPECT_EQ(summary["live"]["osc"]["dropped"], 0);
 }
 
 TEST(LiveCommand, ReconnectsAfterALostConnectionAndKeepsTheFrames) {

@@ -5,6 +5,7 @@
 #include <s2kf/live/live_frame_source.hpp>
 #include <s2kf/live/qtm_client.hpp>
 #include <s2kf/live/qtm_server.hpp>
+#include <s2kf/live/udp_sender.hpp>
 
 #include <gtest/gtest.h>
 
@@ -304,6 +305,44 @@ TEST(PacketChannel, TruncatedPacketIsAnError) {
   } catch (const ProtocolError& e) {
     EXPECT_EQ(std::string(e.what()), "truncated packet: 12 of its 35 declared bytes arrived");
   }
+}
+
+// One resolver serves the TCP client, the listener and the UDP sender: the same messages, and a
+// datagram really arrives.
+TEST(PacketChannel, AddressesResolveForEverySocketKind) {
+  const AddressList stream = resolve("127.0.0.1", 22223, SOCK_STREAM, "connect to");
+  ASSERT_NE(stream.get(), nullptr);
+  EXPECT_EQ(stream->ai_family, AF_INET);
+  EXPECT_EQ(stream->ai_socktype, SOCK_STREAM);
+  EXPECT_EQ(ntohs(reinterpret_cast<const sockaddr_in*>(stream->ai_addr)->sin_port), 22223);
+  EXPECT_EQ(resolve("::1", 9, SOCK_DGRAM, "send to")->ai_family, AF_INET6);
+  try {
+    UdpSender sender("no-such-host.invalid", 9);
+    FAIL() << "no error";
+  } catch (const ConnectionError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("cannot send to no-such-host.invalid:9: ", 0), 0u) << e.what();
+  }
+  try {
+    std::uint16_t port = 0;
+    listen_tcp("no-such-host.invalid", 0, port);
+    FAIL() << "no error";
+  } catch (const ConnectionError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("cannot listen on no-such-host.invalid:0: ", 0), 0u) << e.what();
+  }
+
+  Socket receiver(::socket(AF_INET, SOCK_DGRAM, 0));
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(receiver.fd(), reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  socklen_t length = sizeof address;
+  ::getsockname(receiver.fd(), reinterpret_cast<sockaddr*>(&address), &length);
+  UdpSender sender("localhost", ntohs(address.sin_port));
+  ASSERT_TRUE(sender.send(std::string("pose")));
+  char got[16] = {};
+  ASSERT_TRUE(detail::wait_readable(receiver.fd(), 2000));
+  EXPECT_EQ(::recv(receiver.fd(), got, sizeof got, 0), 4);
+  EXPECT_EQ(std::string(got), "pose");
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // The viewer page (`s2kf track --html`, `s2kf view`): rendered by headless chromium, the skeleton it
 // draws is where the library's forward kinematics puts it, the timeline moves it, damaged data
 // blocks are reported on the page, long motions are decimated, and bad input to `s2kf view` fails
-// cleanly. Tests that need chromium skip, saying why, where it cannot run.
+// cleanly. The live page (`s2kf live --view`) follows a stream `s2kf serve` sends. Tests that need chromium
+// skip, saying why, where it cannot run.
+#include "child_process.hpp"
 #include "cli_runner.hpp"
 #include "viewer/headless_chromium.hpp"
 
@@ -304,6 +306,58 @@ TEST_F(ViewerPage, DamagedDataBlocksAreNamedOnThePage) {
     // Shown to the person, not only in the hidden state.
     EXPECT_NE(run.stdout_text.find("<div id=\"error\">"), std::string::npos) << damage.name;
   }
+}
+
+TEST_F(ViewerPage, LivePageFollowsTheStream) {
+  SKIP_WITHOUT_CHROMIUM();
+  const fs::path dir = kWork / "live";
+  fs::create_directories(dir);
+  s2kf::test_support::ServeProcess server(recording_, dir, {"--loop"});
+  const std::string prefix = (dir / "live").string();
+  s2kf::test_support::ChildProcess live({S2KF_CLI, "live", server.address(), "--markerset", "kit",
+                                         "--no-calibrate", "--height", std::to_string(kHeightMm), "--seconds",
+                                         "60", "--view", "0", "--formats", "csv", "--quiet", "--out", prefix},
+                                        dir / "live_output.txt");
+  std::string url;
+  const bool printed = live.wait_for_output(
+      [&](const std::string& out) {
+        const std::size_t at = out.find("http://"), end = out.find('\n', at);
+        if (at == std::string::npos || end == std::string::npos) return false;
+        url = out.substr(at, end - at);
+        return true;
+      },
+      20);
+  ASSERT_TRUE(printed) << live.output();
+  // The page's test hook: its state at the 20th frame received and at the 60th.
+  const auto run = s2kf::test_support::run_chromium(url + "#reads=20,60&layers=", "--dump-dom", kWork);
+  EXPECT_EQ(live.stop(SIGINT), 0) << live.output();
+  EXPECT_EQ(run.stderr_text.find("Uncaught"), std::string::npos) << run.stderr_text;
+  const nlohmann::json state = scene_state(run.stdout_text);
+  ASSERT_TRUE(state.is_object()) << "no scene state; chromium said:\n" << run.stderr_text.substr(0, 2000);
+  ASSERT_TRUE(state.value("ok", false)) << state.dump();
+  EXPECT_TRUE(state["errors"].empty()) << state["errors"].dump();
+  EXPECT_EQ(state["frames_received"], 60);
+  ASSERT_TRUE(state["opened"].is_object()) << state.dump();
+
+  // Both drawn poses are forward kinematics of the poses s2kf live tracked (its CSV), and differ.
+  const s2kf::body::BodyModel model = s2kf::body::mmm_body_model(kHeightMm);
+  const s2kf::io::MotionTable motion = s2kf::io::load_motion_csv(prefix + ".csv");
+  const auto row_of = [&](long frame) {
+    const auto found = std::find(motion.frame.begin(), motion.frame.end(), frame);
+    EXPECT_NE(found, motion.frame.end()) << "frame " << frame << " is not in the CSV";
+    return found == motion.frame.end() ? 0L : static_cast<long>(found - motion.frame.begin());
+  };
+  const long first = state["opened"]["frame"].get<long>(), second = state["frame"].get<long>();
+  EXPECT_LT(first, second);
+  EXPECT_LT(largest_joint_error(state["opened"], fk_joints(model, motion, row_of(first))), 0.01);
+  EXPECT_LT(largest_joint_error(state, fk_joints(model, motion, row_of(second))), 0.01);
+  const double moved = largest_joint_error(state, fk_joints(model, motion, row_of(first)));
+  EXPECT_GT(moved, 5.0) << "the skeleton did not move between the two reads";
+  std::cout << "live page: frames " << first << " and " << second << ", the skeleton moved " << moved
+            << " mm (largest joint)\n";
+  const nlohmann::json summary = nlohmann::json::parse(s2kf::test_support::slurp(prefix + ".json"));
+  EXPECT_EQ(summary["live"]["view"]["browsers"], 1);
+  EXPECT_GE(summary["live"]["view"]["frames_sent"].get<long>(), 60);
 }
 
 TEST_F(ViewerPage, ViewOfABadPrefixSaysWhyAndWritesNothing) {

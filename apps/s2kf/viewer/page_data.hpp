@@ -7,9 +7,9 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 
 #include <Eigen/Core>
 
@@ -90,6 +90,85 @@ inline void append_float(std::string& bytes, double value) {
 inline body::Pose pose_of(const io::MotionRowRef& values) { return body::pose_from_row(values); }
 }  // namespace detail
 
+/// The layout of a page's records for `model` and `mapping` (the blocks, the skeleton, the markers
+/// shown), without records yet; `with_truth` adds the true skeleton's block.
+inline PageData page_layout(const body::BodyModel& model, const body::MarkerMapping& mapping,
+                            bool with_truth) {
+  if (static_cast<int>(mapping.point_of_marker.size()) != model.marker_count())
+    throw std::runtime_error("the marker mapping does not belong to the body model");
+  PageData data;
+  data.skeleton = skeleton_of(model);
+  for (int m = 0; m < model.marker_count(); ++m)
+    if (mapping.point_of_marker[static_cast<std::size_t>(m)] >= 0) data.markers.push_back(m);
+  const int points = static_cast<int>(data.skeleton.frames.size());
+  const int markers = static_cast<int>(data.markers.size());
+  const std::vector<std::pair<std::string, int>> layout = {
+      {"frame", 1},
+      {"time", 1},
+      {"pose", 6 + model.joint_count()},
+      {"mean_marker_distance", 1},
+      {"skeleton", 3 * points},
+      {"model_markers", 3 * markers},
+      {"recorded_markers", 3 * markers},
+  };
+  for (const auto& [name, count] : layout) {
+    data.blocks.push_back({name, data.floats_per_frame, count});
+    data.floats_per_frame += count;
+  }
+  if (with_truth) {
+    data.blocks.push_back({"truth_skeleton", data.floats_per_frame, 3 * points});
+    data.floats_per_frame += 3 * points;
+  }
+  return data;
+}
+
+/// Appends one frame's record (all blocks but the truth) to `bytes`: `values` the tracked row (NaN
+/// when not tracked), `recorded` the frame as read (points in the recording's order).
+inline void append_record(const PageData& data, const body::BodyModel& model,
+                          const body::MarkerMapping& mapping, double frame_number, double time,
+                          const io::MotionRowRef& values, const MarkerFrame& recorded, std::string& bytes) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const int points = static_cast<int>(data.skeleton.frames.size());
+  const int markers = static_cast<int>(data.markers.size());
+  Eigen::Matrix3Xd joints = Eigen::Matrix3Xd::Constant(3, points, nan);
+  Eigen::Matrix3Xd model_markers = Eigen::Matrix3Xd::Constant(3, markers, nan);
+  Eigen::Matrix3Xd shown = Eigen::Matrix3Xd::Constant(3, markers, nan);
+  if (io::is_tracked_row(values)) {
+    const body::FrameTransforms frames = body::joint_frames(model, detail::pose_of(values));
+    for (int p = 0; p < points; ++p)
+      joints.col(p) =
+          frames.origins[static_cast<std::size_t>(data.skeleton.frames[static_cast<std::size_t>(p)])];
+    const Eigen::Matrix3Xd all = body::marker_positions(model, frames);
+    for (int k = 0; k < markers; ++k)
+      model_markers.col(k) = all.col(data.markers[static_cast<std::size_t>(k)]);
+  }
+  double distance_sum = 0;
+  int seen = 0;
+  for (int k = 0; k < markers; ++k) {
+    const int p =
+        mapping.point_of_marker[static_cast<std::size_t>(data.markers[static_cast<std::size_t>(k)])];
+    const bool visible =
+        p < recorded.positions.cols() && recorded.visible(p) && recorded.positions.col(p).allFinite();
+    if (!visible) continue;
+    shown.col(k) = recorded.positions.col(p);
+    if (model_markers.col(k).allFinite()) {
+      distance_sum += (shown.col(k) - model_markers.col(k)).norm();
+      ++seen;
+    }
+  }
+  const auto append_points = [&](const Eigen::Matrix3Xd& positions) {
+    for (Eigen::Index k = 0; k < positions.cols(); ++k)
+      for (int r = 0; r < 3; ++r) detail::append_float(bytes, positions(r, k));
+  };
+  detail::append_float(bytes, frame_number);
+  detail::append_float(bytes, time);
+  for (Eigen::Index c = 0; c < values.size(); ++c) detail::append_float(bytes, values(c));
+  detail::append_float(bytes, seen > 0 ? distance_sum / seen : nan);
+  append_points(joints);
+  append_points(model_markers);
+  append_points(shown);
+}
+
 /// Builds the records. `recording` is read from its current position, one frame per motion row
 /// (the rows of a tracked motion are the recording's frames in order); `truth` (same rows as the
 /// motion) adds the true skeleton, posed on `model`'s bones (a truth file holds angles only).
@@ -109,32 +188,8 @@ inline PageData build_page_data(const body::BodyModel& model, const body::Marker
     throw std::runtime_error("the truth has " + std::to_string(truth->frames()) + " rows of " +
                              std::to_string(truth->values.cols()) + " values, the motion " +
                              std::to_string(motion.frames()) + " of " + std::to_string(motion.values.cols()));
-  if (static_cast<int>(mapping.point_of_marker.size()) != model.marker_count())
-    throw std::runtime_error("the marker mapping does not belong to the body model");
-
-  PageData data;
-  data.skeleton = skeleton_of(model);
-  for (int m = 0; m < model.marker_count(); ++m)
-    if (mapping.point_of_marker[static_cast<std::size_t>(m)] >= 0) data.markers.push_back(m);
+  PageData data = page_layout(model, mapping, truth.has_value());
   const int points = static_cast<int>(data.skeleton.frames.size());
-  const int markers = static_cast<int>(data.markers.size());
-  const std::vector<std::pair<std::string, int>> layout = {
-      {"frame", 1},
-      {"time", 1},
-      {"pose", static_cast<int>(motion.values.cols())},
-      {"mean_marker_distance", 1},
-      {"skeleton", 3 * points},
-      {"model_markers", 3 * markers},
-      {"recorded_markers", 3 * markers},
-  };
-  for (const auto& [name, count] : layout) {
-    data.blocks.push_back({name, data.floats_per_frame, count});
-    data.floats_per_frame += count;
-  }
-  if (truth) {
-    data.blocks.push_back({"truth_skeleton", data.floats_per_frame, 3 * points});
-    data.floats_per_frame += 3 * points;
-  }
 
   // Decimation: the smallest stride that keeps the data within the limit.
   const std::size_t record_bytes = 4u * static_cast<std::size_t>(data.floats_per_frame);
@@ -148,13 +203,8 @@ inline PageData build_page_data(const body::BodyModel& model, const body::Marker
   data.bytes.reserve(static_cast<std::size_t>(data.frames_stored) * record_bytes);
 
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  const auto append_points = [&](const Eigen::Matrix3Xd& positions, int count) {
-    for (int k = 0; k < count; ++k)
-      for (int r = 0; r < 3; ++r) detail::append_float(data.bytes, positions(r, k));
-  };
   c3d::Frame frame;
-  Eigen::Matrix3Xd joints(3, points), model_markers(3, markers), recorded(3, markers),
-      truth_joints(3, points);
+  Eigen::Matrix3Xd truth_joints(3, points);
   for (std::size_t row = 0; row < rows; ++row) {
     if (!recording.read_frame(frame))
       throw std::runtime_error("the recording ends after " + std::to_string(row) +
@@ -166,37 +216,8 @@ inline PageData build_page_data(const body::BodyModel& model, const body::Marker
     if (row % static_cast<std::size_t>(data.stride) != 0) continue;
     const Eigen::Index r = static_cast<Eigen::Index>(row);
     const io::MotionRowRef values = motion.values.row(r).transpose();
-    joints.setConstant(nan);
-    model_markers.setConstant(nan);
-    if (io::is_tracked_row(values)) {
-      const body::FrameTransforms frames = body::joint_frames(model, detail::pose_of(values));
-      for (int p = 0; p < points; ++p)
-        joints.col(p) =
-            frames.origins[static_cast<std::size_t>(data.skeleton.frames[static_cast<std::size_t>(p)])];
-      const Eigen::Matrix3Xd all = body::marker_positions(model, frames);
-      for (int k = 0; k < markers; ++k)
-        model_markers.col(k) = all.col(data.markers[static_cast<std::size_t>(k)]);
-    }
-    double distance_sum = 0;
-    int seen = 0;
-    for (int k = 0; k < markers; ++k) {
-      const int p =
-          mapping.point_of_marker[static_cast<std::size_t>(data.markers[static_cast<std::size_t>(k)])];
-      const bool visible =
-          p < frame.positions.cols() && frame.visible(p) && frame.positions.col(p).allFinite();
-      recorded.col(k) = visible ? Eigen::Vector3d(frame.positions.col(p)) : Eigen::Vector3d::Constant(nan);
-      if (visible && model_markers.col(k).allFinite()) {
-        distance_sum += (recorded.col(k) - model_markers.col(k)).norm();
-        ++seen;
-      }
-    }
-    detail::append_float(data.bytes, static_cast<double>(motion.frame[row]));
-    detail::append_float(data.bytes, motion.time[row]);
-    for (Eigen::Index c = 0; c < values.size(); ++c) detail::append_float(data.bytes, values(c));
-    detail::append_float(data.bytes, seen > 0 ? distance_sum / seen : nan);
-    append_points(joints, points);
-    append_points(model_markers, markers);
-    append_points(recorded, markers);
+    append_record(data, model, mapping, static_cast<double>(motion.frame[row]), motion.time[row], values,
+                  frame, data.bytes);
     if (truth) {
       truth_joints.setConstant(nan);
       const io::MotionRowRef true_values = truth->values.row(r).transpose();
@@ -206,7 +227,8 @@ inline PageData build_page_data(const body::BodyModel& model, const body::Marker
           truth_joints.col(p) =
               frames.origins[static_cast<std::size_t>(data.skeleton.frames[static_cast<std::size_t>(p)])];
       }
-      append_points(truth_joints, points);
+      for (int p = 0; p < points; ++p)
+        for (int c = 0; c < 3; ++c) detail::append_float(data.bytes, truth_joints(c, p));
     }
   }
   return data;

@@ -83,8 +83,8 @@ inline void fill(std::string& page, const std::string& marker, const std::string
   page.replace(at, marker.size(), text);
 }
 
-inline std::string viewer_page(const PageData& data, const body::BodyModel& model, const std::string& name,
-                               double rate_hz, const nlohmann::json& summary) {
+/// The page with the metadata text `meta` and the base64 data block `data`.
+inline std::string assemble_page(const std::string& meta, const std::string& data, const std::string& name) {
   const auto module_url = [](const std::string& source) {
     return "data:text/javascript;base64," + base64_encode(source);
   };
@@ -96,14 +96,27 @@ inline std::string viewer_page(const PageData& data, const body::BodyModel& mode
   // Filled from the template's last marker to its first: find() then always meets the template's
   // own marker before any filled-in text (a summary may hold any string).
   fill(page, "@S2KF:SCRIPT@", script_safe(page_script()));
-  fill(page, "@S2KF:DATA@", base64_encode(data.bytes));
-  fill(page, "@S2KF:META@", script_safe(page_metadata(data, model, name, rate_hz, summary).dump()));
+  fill(page, "@S2KF:DATA@", data);
+  fill(page, "@S2KF:META@", script_safe(meta));
   fill(page, "@S2KF:IMPORTMAP@", import_map.dump());
   fill(page, "@S2KF:STYLE@", page_style());
   fill(page, "@S2KF:LICENCE@",
        "three.js " + std::string(three_version()) + " (inlined below), " + three_licence_text());
   fill(page, "@S2KF:TITLE@", html_escaped(name + " - s2kf viewer"));
   return page;
+}
+
+inline std::string viewer_page(const PageData& data, const body::BodyModel& model, const std::string& name,
+                               double rate_hz, const nlohmann::json& summary) {
+  return assemble_page(page_metadata(data, model, name, rate_hz, summary).dump(), base64_encode(data.bytes),
+                       name);
+}
+
+/// The live page of `s2kf live --view`: no data; its metadata and records come as server-sent
+/// events from the path "events" beside it.
+inline std::string live_viewer_page(const std::string& name) {
+  return assemble_page(nlohmann::json{{"format", "s2kf-viewer-1"}, {"live", true}, {"name", name}}.dump(), "",
+                       name);
 }
 
 }  // namespace s2kf::cli::viewer

@@ -1,6 +1,8 @@
 // The s2kf viewer page's script (docs/viewer.md): decodes the motion data block, draws the tracked
 // skeleton, the recorded and model markers (and the truth) with three.js, plays the motion, plots
 // joint angles and the marker distance, and writes the scene state into #scene-state for tests.
+// A live page (`s2kf live --view`, docs/live.md) gets its metadata and records by server-sent
+// events instead and follows the newest frame.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/OrbitControls.js';
 
@@ -80,16 +82,70 @@ function parseFragment() {
   return options;
 }
 
-function main() {
-  let data;
-  try {
-    data = loadData();
-  } catch (e) {
-    fail(e.message);
-    return;
-  }
-  const { meta, values, block } = data;
-  const F = meta.floats_per_frame, N = meta.frames_stored;
+// One record sent by s2kf live: base64 of little-endian float32 values.
+function decodeRecord(text, floats) {
+  const binary = atob(text);
+  if (binary.length !== 4 * floats)
+    throw new Error('A live record has ' + binary.length + ' bytes, the metadata promises ' + 4 * floats + '.');
+  const view = new DataView(new ArrayBuffer(binary.length));
+  for (let i = 0; i < binary.length; ++i) view.setUint8(i, binary.charCodeAt(i));
+  const values = new Float32Array(floats);
+  for (let i = 0; i < floats; ++i) values[i] = view.getFloat32(4 * i, true);
+  return values;
+}
+
+// The live page: the metadata comes as the event "meta", each tracked frame as the event "frame",
+// the stream's end as "end". The scene starts with the first frame.
+function startLive() {
+  const fragment = parseFragment();
+  const source = new EventSource('events');
+  let meta = null, viewer = null, received = 0;
+  const status = (text) => {
+    const notice = document.getElementById('notice');
+    notice.hidden = false;
+    notice.textContent = text;
+  };
+  status('Waiting for s2kf live to send the first frame...');
+  source.addEventListener('meta', (e) => { meta = JSON.parse(e.data); });
+  source.addEventListener('frame', (e) => {
+    try {
+      if (!meta) throw new Error('A live frame arrived before the metadata.');
+      const record = decodeRecord(e.data, meta.floats_per_frame);
+      ++received;
+      if (!viewer) {
+        const block = {};
+        for (const b of meta.blocks) block[b.name] = b;
+        viewer = main({ meta, values: record, block }, { source, fragment });
+        status('Live from ' + meta.name + ' at ' + meta.rate + ' Hz.');
+      } else {
+        viewer.push(record, received);
+      }
+    } catch (error) {
+      source.close();
+      fail('The live view failed: ' + error.message);
+    }
+  });
+  source.addEventListener('end', (e) => {
+    source.close();
+    status('The stream has ended (' + e.data + ').');
+  });
+  source.addEventListener('open', () => {
+    if (meta) status('Live from ' + meta.name + ' at ' + meta.rate + ' Hz.');
+  });
+  source.addEventListener('error', () => {
+    if (source.readyState !== EventSource.CLOSED) status('The connection to s2kf live was lost; trying again...');
+  });
+}
+
+// Draws the records of `data`; `live` (the event source and the URL fragment) makes the page
+// follow the stream: returns { push(record) }, which appends a frame and shows it.
+function main(data, live) {
+  const { meta, block } = data;
+  let values = data.values;
+  const F = meta.floats_per_frame;
+  let N = live ? 1 : meta.frames_stored;
+  // A live page keeps the last few seconds for its plots.
+  const windowFrames = live ? Math.max(1, meta.live_window_frames || 1000) : N;
   const P = meta.skeleton.points.length, M = meta.markers.length;
   const hasTruth = Boolean(block.truth_skeleton);
   const at = (frame, name, k) => values[frame * F + block[name].offset + k];
@@ -237,7 +293,7 @@ function main() {
 
     timeline.value = String(current);
     const tracked = Number.isFinite(at(current, 'pose', 0));
-    frameLabel.textContent = 'frame ' + frameNumber(current) + ' of ' + meta.frames_in_motion + ', ' +
+    frameLabel.textContent = 'frame ' + frameNumber(current) + (live ? '' : ' of ' + meta.frames_in_motion) + ', ' +
       at(current, 'time', 0).toFixed(3) + ' s' + (tracked ? '' : ' (not tracked)') + ', ' + hidden + ' hidden';
     const meanDistance = at(current, 'mean_marker_distance', 0);
     distanceValue.textContent = Number.isFinite(meanDistance) ? meanDistance.toFixed(1) + ' mm' : 'n/a';
@@ -288,7 +344,7 @@ function main() {
     g.strokeStyle = '#ffcc33'; g.beginPath(); g.moveTo(x(current), top); g.lineTo(x(current), H - bottom); g.stroke();
   }
   const degrees = 180 / Math.PI;
-  const distanceSeries = Array.from({ length: N }, (_, i) => at(i, 'mean_marker_distance', 0));
+  let distanceSeries = Array.from({ length: N }, (_, i) => at(i, 'mean_marker_distance', 0));
   function drawPlots() {
     const j = Number(jointSelect.value);
     const joint = meta.joints[j];
@@ -302,7 +358,8 @@ function main() {
   }
 
   // ---- summary ----
-  document.getElementById('title').textContent = meta.name + ' (' + meta.frames_in_motion + ' frames, ' + meta.rate + ' Hz)';
+  document.getElementById('title').textContent = live ? meta.name + ' (live, ' + meta.rate + ' Hz)'
+    : meta.name + ' (' + meta.frames_in_motion + ' frames, ' + meta.rate + ' Hz)';
   if (meta.decimated) {
     const notice = document.getElementById('notice');
     notice.hidden = false;
@@ -310,6 +367,7 @@ function main() {
       ' frames), to keep the page under ' + (meta.data_limit_bytes / 1048576).toFixed(0) + ' MiB of motion data.';
   }
   const s = meta.summary || {};
+  if (live) document.getElementById('summary').hidden = true;
   const rows = [];
   const mm = (v) => (typeof v === 'number' ? v.toFixed(1) + ' mm' : 'n/a');
   const text = (v) => document.createTextNode(String(v));
@@ -376,7 +434,7 @@ function main() {
       // Column-major 4x4, acting on metres.
       view_projection: viewProjection.elements, joints,
       marker_distances_mm: markerDistances.map((d) => (Number.isFinite(d) ? d : null)),
-      frames_stored: N, decimated: meta.decimated, errors: window.s2kfErrors,
+      frames_stored: N, decimated: Boolean(meta.decimated), errors: window.s2kfErrors,
     };
   }
   function writeState(extra) {
@@ -429,6 +487,7 @@ function main() {
     if (f.frame !== undefined) { showFrame(storedIndexOf(Number(f.frame))); writeState(); }
   });
 
+  if (live) return followStream();
   showFrame(fragment.frame !== undefined ? storedIndexOf(Number(fragment.frame)) : 0);
   const opened = sceneState();
   if (fragment.scrub !== undefined) {
@@ -441,10 +500,59 @@ function main() {
     writeState();
   }
   if (fragment.play !== undefined) setPlaying(true);
+  return null;
+
+  // The live page: each record is appended (the oldest given up beyond the window) and shown,
+  // unless the person moved the timeline back. Test hook `reads=A,B` (docs/live.md): the state at
+  // the A-th frame received and at the B-th, then the page stops listening.
+  function followStream() {
+    let following = true;
+    timeline.addEventListener('input', () => { following = Number(timeline.value) === N - 1; });
+    const reads = (live.fragment.reads || '').split(',').filter((r) => r !== '').map(Number);
+    let first = null;
+    const check = (received) => {
+      if (reads.length !== 2) return;
+      if (received === reads[0]) first = sceneState();
+      if (received === reads[1]) {
+        live.source.close();
+        writeState({ opened: first, frames_received: received, live: true });
+      }
+    };
+    showFrame(0);
+    writeState({ live: true });
+    check(1);
+    return {
+      push(record, received) {
+        if (values.length < windowFrames * F) {
+          const room = new Float32Array(windowFrames * F);  // once: the window's whole size
+          room.set(values.subarray(0, N * F));
+          values = room;
+        }
+        if (N === windowFrames) values.copyWithin(0, F);
+        else ++N;
+        values.set(record, (N - 1) * F);
+        distanceSeries = Array.from({ length: N }, (_, i) => at(i, 'mean_marker_distance', 0));
+        timeline.max = String(N - 1);
+        showFrame(following ? N - 1 : Math.max(current - (N === windowFrames ? 1 : 0), 0));
+        check(received);
+      },
+    };
+  }
 }
 
 try {
-  main();
+  const metaElement = document.getElementById('s2kf-meta');
+  let data = null;
+  if (metaElement && /"live"\s*:\s*true/.test(metaElement.textContent)) {
+    startLive();
+  } else {
+    try {
+      data = loadData();
+    } catch (e) {
+      fail(e.message);
+    }
+    if (data) main(data, null);
+  }
 } catch (e) {
   fail('The viewer failed: ' + (e && e.message ? e.message : e));
   throw e;

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -78,22 +79,42 @@ inline std::string address_text(const std::string& host, std::uint16_t port) {
 }
 }  // namespace detail
 
+/// getaddrinfo's list of addresses, freed with its owner.
+using AddressList = std::unique_ptr<addrinfo, decltype(&::freeaddrinfo)>;
+
+/// The addresses of host:port for sockets of `socktype` (SOCK_STREAM, SOCK_DGRAM); `passive` for a
+/// socket to listen on. A ConnectionError "cannot DOING HOST:PORT: why" when the name does not
+/// resolve (`doing`: "connect to", "listen on", "send to").
+inline AddressList resolve(const std::string& host, std::uint16_t port, int socktype,
+                           const std::string& doing, bool passive = false) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = socktype;
+  hints.ai_flags = passive ? AI_PASSIVE : 0;
+  addrinfo* found = nullptr;
+  const int status = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found);
+  if (status != 0)
+    throw ConnectionError("cannot " + doing + " " + detail::address_text(host, port) + ": " +
+                          ::gai_strerror(status));
+  return AddressList(found, &::freeaddrinfo);
+}
+
+/// A socket for `address` (closed on exec: a child process does not inherit it); not open when the
+/// system refuses (errno says why).
+inline Socket open_socket(const addrinfo& address) {
+  return Socket(::socket(address.ai_family, address.ai_socktype | SOCK_CLOEXEC, address.ai_protocol));
+}
+
 /// A TCP connection to host:port within `timeout_s`, with Nagle's delay off (a frame goes out at
 /// once). A ConnectionError says why not, e.g. "cannot connect to 127.0.0.1:22223: Connection
 /// refused".
 inline Socket connect_tcp(const std::string& host, std::uint16_t port, double timeout_s) {
   const std::string where = detail::address_text(host, port);
-  addrinfo hints{};
-  hints.ai_family = AF_UNSPEC;
-  hints.ai_socktype = SOCK_STREAM;
-  addrinfo* found = nullptr;
-  if (const int status = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found);
-      status != 0)
-    throw ConnectionError("cannot connect to " + where + ": " + ::gai_strerror(status));
+  const AddressList found = resolve(host, port, SOCK_STREAM, "connect to");
   std::string problem = "no address";
   Socket connected;
-  for (addrinfo* a = found; a && !connected.open(); a = a->ai_next) {
-    Socket s(::socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol));
+  for (const addrinfo* a = found.get(); a && !connected.open(); a = a->ai_next) {
+    Socket s = open_socket(*a);
     if (!s.open()) {
       problem = std::strerror(errno);
       continue;
@@ -125,7 +146,6 @@ inline Socket connect_tcp(const std::string& host, std::uint16_t port, double ti
     ::setsockopt(s.fd(), IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
     connected = std::move(s);
   }
-  ::freeaddrinfo(found);
   if (!connected.open()) throw ConnectionError("cannot connect to " + where + ": " + problem);
   return connected;
 }
@@ -133,16 +153,9 @@ inline Socket connect_tcp(const std::string& host, std::uint16_t port, double ti
 /// A listening TCP socket on address:port (port 0: one the system chooses); `bound_port` gets the
 /// port.
 inline Socket listen_tcp(const std::string& address, std::uint16_t port, std::uint16_t& bound_port) {
-  addrinfo hints{};
-  hints.ai_family = AF_UNSPEC;
-  hints.ai_socktype = SOCK_STREAM;
-  hints.ai_flags = AI_PASSIVE;
-  addrinfo* found = nullptr;
   const std::string where = detail::address_text(address, port);
-  if (const int status = ::getaddrinfo(address.c_str(), std::to_string(port).c_str(), &hints, &found);
-      status != 0)
-    throw ConnectionError("cannot listen on " + where + ": " + ::gai_strerror(status));
-  Socket s(::socket(found->ai_family, found->ai_socktype | SOCK_CLOEXEC, found->ai_protocol));
+  const AddressList found = resolve(address, port, SOCK_STREAM, "listen on", true);
+  Socket s = open_socket(*found);
   const int one = 1;
   std::string problem;
   if (!s.open())
@@ -150,7 +163,6 @@ inline Socket listen_tcp(const std::string& address, std::uint16_t port, std::ui
   else if (::setsockopt(s.fd(), SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0 ||
            ::bind(s.fd(), found->ai_addr, found->ai_addrlen) != 0 || ::listen(s.fd(), 4) != 0)
     problem = std::strerror(errno);
-  ::freeaddrinfo(found);
   if (!problem.empty()) throw ConnectionError("cannot listen on " + where + ": " + problem);
   sockaddr_storage bound{};
   socklen_t length = sizeof bound;

@@ -11,6 +11,7 @@
 
 #include <cerrno>
 #include <cstdint>
+#include <cstring>
 #include <string>
 
 namespace s2kf::live {
@@ -19,19 +20,11 @@ class UdpSender {
  public:
   /// A ConnectionError when the host cannot be resolved.
   UdpSender(const std::string& host, std::uint16_t port) {
-    addrinfo hints{};
-    hints.ai_family = AF_UNSPEC;
-    hints.ai_socktype = SOCK_DGRAM;
-    addrinfo* found = nullptr;
-    const std::string where = detail::address_text(host, port);
-    if (const int status = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found);
-        status != 0)
-      throw ConnectionError("cannot send to " + where + ": " + ::gai_strerror(status));
-    socket_ = Socket(::socket(found->ai_family, found->ai_socktype | SOCK_CLOEXEC, found->ai_protocol));
-    const bool connected = socket_.open() && ::connect(socket_.fd(), found->ai_addr, found->ai_addrlen) == 0;
-    const int error = errno;
-    ::freeaddrinfo(found);
-    if (!connected) throw ConnectionError("cannot send to " + where + ": " + std::strerror(error));
+    const AddressList found = resolve(host, port, SOCK_DGRAM, "send to");
+    socket_ = open_socket(*found);
+    if (!socket_.open() || ::connect(socket_.fd(), found->ai_addr, found->ai_addrlen) != 0)
+      throw ConnectionError("cannot send to " + detail::address_text(host, port) + ": " +
+                            std::strerror(errno));
   }
 
   /// Sends one datagram; false (and counted) when it could not go out at once.
