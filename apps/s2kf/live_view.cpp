@@ -87,6 +87,9 @@ LiveView::LiveView(const std::string& address, int port, const std::string& page
           --view.following;
         });
   });
+  // A browser that takes nothing for 2 s is let go (it reconnects by itself), so that the end of
+  // a run never waits long for one.
+  view.server.set_write_timeout(2, 0);
   const std::string where = address + ":" + std::to_string(port);
   view.port = port == 0 ? view.server.bind_to_any_port(address)
                         : (view.server.bind_to_port(address, port) ? port : -1);
