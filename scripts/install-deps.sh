@@ -3,7 +3,7 @@
 # As root it runs apt-get; otherwise it names the missing packages and stops.
 set -euo pipefail
 packages=(g++ cmake make ninja-build libeigen3-dev libgtest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev gnuplot-nox
-  liblo-dev libcpp-httplib-dev)
+  pkg-config liblo-dev libcpp-httplib-dev)
 packages+=("$@")
 missing=()
 for p in "${packages[@]}"; do
