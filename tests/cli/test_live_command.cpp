@@ -251,6 +251,18 @@ TEST(LiveCommand, SlowBrowserNeverHoldsTheTracker) {
             << " s from start to exit\n";
 }
 
+TEST(LiveCommand, LiveViewOnATakenPortIsOneSentence) {
+  const fs::path dir = empty_scratch("live_view_taken");
+  Server server(data_file("walk.c3d"), dir);  // its port is taken
+  const std::string port = std::to_string(server.port());
+  const CommandResult r =
+      run_command("live " + server.address() + " --view " + port + " --out " + (dir / "x").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output, "s2kf: --view: cannot serve on 127.0.0.1:" + port +
+                          " (the port is taken, or the address is not one of this machine's)\n");
+  EXPECT_FALSE(fs::exists(dir / "x.csv"));
+}
+
 TEST(LiveCommand, ReconnectsAfterALostConnectionAndKeepsTheFrames) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = empty_scratch("live_reconnect");
