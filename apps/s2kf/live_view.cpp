@@ -30,8 +30,8 @@ struct LiveView::Impl {
   Counts counts;
 
   /// The next piece of one browser's stream (waits up to a second for something new; a comment
-  /// line then keeps the connection alive). `last`: the sequence it got last; `ended`: set when
-  /// the piece is the end event.
+  /// line then keeps the connection alive). `last`: the sequence it got last; `stream_ended`: set
+  /// when the piece is the end event.
   std::string next_event(long& last, bool& metadata_sent, bool& stream_ended) {
     std::unique_lock<std::mutex> lock(mutex);
     changed.wait_for(lock, std::chrono::seconds(1), [&] {
