@@ -165,10 +165,10 @@ void run_live(LiveSettings settings) {
   live::LiveFrameSource source(*feed, source_options);
   // The session is prepared on a first stretch: a calibrated subject needs one second (the height
   // check), a calibration --calibration-seconds.
-  const double first_seconds =
-      track.request.subject.empty() && track.request.calibrate ? settings.calibration_seconds : 1.0;
+  const bool calibrating = track.request.subject.empty() && track.request.calibrate;
+  const double first_seconds = calibrating ? settings.calibration_seconds : 1.0;
   const auto first_frames = std::max<std::int64_t>(1, std::llround(first_seconds * rate));
-  if (!track.quiet && track.request.subject.empty() && track.request.calibrate)
+  if (!track.quiet && calibrating)
     std::cerr << "s2kf live: calibrating the subject on the first " << first_frames << " frames" << std::endl;
   const MarkerSequence& first = source.hold_first(first_frames);
   if (first.frame_count() == 0)
@@ -182,7 +182,12 @@ void run_live(LiveSettings settings) {
   input.frames = &source;
   input.rate_hz = rate;
   input.frame_count = -1;
-  track.request.calibration_frames = static_cast<long>(first.frame_count());
+  if (calibrating) {  // else the first stretch may be shorter than a calibration needs (--frames 5)
+    if (first.frame_count() < 10)
+      throw UserError(name + ": the calibration needs at least 10 frames, the stream gave " +
+                      std::to_string(first.frame_count()) + " (give --subject or --no-calibrate)");
+    track.request.calibration_frames = static_cast<long>(first.frame_count());
+  }
   track.request.calibration_threads = every_core();  // one stream: its calibration may take every core
 
   // The row's values are the pose columns after frame and time.

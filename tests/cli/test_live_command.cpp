@@ -263,6 +263,23 @@ TEST(LiveCommand, LiveViewOnATakenPortIsOneSentence) {
   EXPECT_FALSE(fs::exists(dir / "x.csv"));
 }
 
+TEST(LiveCommand, AFewFramesAreEnoughWithoutACalibration) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = empty_scratch("live_few");
+  Server server(data_file("walk.c3d"), dir, {"--loop"});  // serves the second run too
+  const std::string live = (dir / "live").string();
+  CommandResult r = run_command("live " + server.address() + " --subject " + walk_subject() +
+                                " --frames 5 --formats csv --quiet --out " + live);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(csv_rows(read_text(live + ".csv")).size(), 6u);
+  r = run_command("live " + server.address() + " --frames 5 --formats csv --quiet --out " + live +
+                  "_calibrated");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output, "s2kf: " + server.address() +
+                          ": the calibration needs at least 10 frames, the stream gave 5 (give --subject or "
+                          "--no-calibrate)\n");
+}
+
 TEST(LiveCommand, ReconnectsAfterALostConnectionAndKeepsTheFrames) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = empty_scratch("live_reconnect");
