@@ -8,16 +8,25 @@ the motion three ways against its truth:
   default  s2kf track REC --truth TRUTH                    (calibrates on the recording itself)
   static   s2kf calibrate STATIC --static; s2kf track REC --subject SUBJECT
   both     the same subject as --markerset: calibrated again on the recording, starting from it
+  track    s2kf track REC --static STATIC [--static-options]  (what a user runs)
+  refine   s2kf track REC --static STATIC --static-refine [--static-options]
+
+--stance-sd DEG holds each seed's static trial in a posture of its own: every joint angle off the
+reference pose (--stance) by a draw of SD DEG (seeded by the seed, kept inside the joint's limits),
+as people stand; 0 keeps the bundled static motion's posture.
 
 and prints Markdown tables of the means (segment orientation, limb flexion, root orientation RMS
 in degrees, root position RMS and mean marker distance in mm), one per occlusion mode and seed set.
 
     scripts/static-trial-table.py [--s2kf build/s2kf] [--seeds 1,2,3] [--out DIR] [--raw FILE.json]
-                                  [--occlusion none,paper] [--extra="--smooth"]
+                                  [--occlusion none,paper] [--extra="--smooth"] [--configs default,track]
+                                  [--stance zero|t-pose|a-pose] [--stance-sd DEG] [--static-options="..."]
 """
 import argparse
 import json
+import math
 import os
+import random
 import subprocess
 import sys
 
@@ -30,9 +39,14 @@ parser.add_argument("--static-motion", default="static", help="the static trial'
 parser.add_argument("--out", default="results/static-trial")
 parser.add_argument("--raw", default="", help="write every run's figures to this JSON file")
 parser.add_argument("--extra", default="", help="more options for every s2kf track, space-separated (--smooth)")
+parser.add_argument("--configs", default="default,static,both", help="of default, static, both, track, refine")
+parser.add_argument("--stance", default="zero", help="the static trial's reference pose: zero, t-pose, a-pose")
+parser.add_argument("--stance-sd", type=float, default=0.0, help="SD (deg) of each joint's offset from it")
+parser.add_argument("--markerset", default="", help="the markers the simulated subject wears (plugin_gait, cmu)")
+parser.add_argument("--static-options", default="", help="more options for --static (track, refine), space-separated")
 args = parser.parse_args()
+CONFIGS = tuple(args.configs.split(","))
 PAPER_OCCLUSION = "0.005,100"
-CONFIGS = ("default", "static", "both")
 KEYS = ("segment_orientation_rms_deg", "limb_flexion_rms_deg", "root_orientation_rms_deg", "root_position_rms_mm")
 
 
@@ -42,27 +56,65 @@ def run(*command):
         sys.exit(" ".join([args.s2kf, *command]) + " failed: " + (result.stderr or result.stdout).strip())
 
 
+def write_stance(seed, path):
+    """The bundled static motion with every joint held off the reference pose by its own draw."""
+    table = subprocess.run([args.s2kf, "model", "--joints"], capture_output=True, text=True, check=True).stdout
+    limits = {}
+    for line in table.splitlines()[1:]:
+        name, _parent, _axis, lower, upper = line.split(",")[:5]
+        limits[name] = (math.degrees(float(lower)), math.degrees(float(upper)))
+    reference = {"t-pose": 90, "a-pose": 45}.get(args.stance, 0)
+    base = {name: 0.0 for name in limits}
+    base["LSy"], base["RSy"] = reference, -reference
+    draw = random.Random(1000 + seed)
+    held = {}
+    for name, (lower, upper) in limits.items():
+        value = base[name] + draw.gauss(0, args.stance_sd)
+        held[name] = min(max(value, lower + 0.5), upper - 0.5)
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "motions", "static.json")) as f:
+        motion = json.load(f)
+    motion["name"] = f"static_{args.stance}_{seed}"
+    motion["description"] = f"A static trial near the {args.stance} pose, every joint off it by SD {args.stance_sd} deg"
+    for key in motion["keyframes"]:
+        joints = dict(held)
+        for name, sway in key["joints"].items():
+            joints[name] = held[name] + sway
+        key["joints"] = joints
+    with open(path, "w") as f:
+        json.dump(motion, f, indent=1)
+
+
 os.makedirs(args.out, exist_ok=True)
 rows = []
 for seed in args.seeds.split(","):
     static = os.path.join(args.out, f"static_{seed}.c3d")
     subject = os.path.join(args.out, f"subject_{seed}.json")
-    run("simulate", "--motion", args.static_motion, "--seed", seed, "--out", static)
-    run("calibrate", static, "--static", "--quiet", "--out", subject)
+    static_motion = args.static_motion
+    if args.stance_sd > 0 or args.stance != "zero":
+        static_motion = os.path.join(args.out, f"static_motion_{seed}.json")
+        write_stance(int(seed), static_motion)
+    worn = ["--markerset", args.markerset] if args.markerset else []
+    run("simulate", "--motion", static_motion, "--seed", seed, *worn, "--out", static)
+    if "static" in CONFIGS or "both" in CONFIGS:
+        run("calibrate", static, "--static", "--quiet", "--out", subject, *args.static_options.split())
     for occlusion in args.occlusion.split(","):
         for motion in args.motions.split(","):
             base = os.path.join(args.out, f"{motion}_{seed}_{occlusion}")
             extra = ["--occlusion", PAPER_OCCLUSION] if occlusion == "paper" else []
-            run("simulate", "--motion", motion, "--seed", seed, *extra, "--out", base + ".c3d")
+            run("simulate", "--motion", motion, "--seed", seed, *extra, *worn, "--out", base + ".c3d")
             for config in CONFIGS:
-                option = {"default": [], "static": ["--subject", subject], "both": ["--markerset", subject]}[config]
+                option = {"default": [], "static": ["--subject", subject], "both": ["--markerset", subject],
+                          "track": ["--static", static, *args.static_options.split()],
+                          "refine": ["--static", static, "--static-refine", *args.static_options.split()]}[config]
                 prefix = f"{base}_{config}"
                 run("track", base + ".c3d", "--truth", base + "_truth.csv", *option, *args.extra.split(),
                     "--formats", "csv", "--quiet", "--out", prefix)
                 with open(prefix + ".json") as f:
                     summary = json.load(f)
                 row = {"motion": motion, "seed": int(seed), "occlusion": occlusion, "config": config,
-                       "mean_marker_distance_mm": summary["mean_marker_distance_all_frames_mm"]}
+                       "mean_marker_distance_mm": summary["mean_marker_distance_all_frames_mm"],
+                       "most_rejected_share": max([(r["innovation"] + r["frozen"]) / summary["frames"]
+                                                   for r in summary["rejected_markers"]] or [0])}
                 row.update({k: summary["truth"][k] for k in KEYS})
                 rows.append(row)
 

@@ -72,6 +72,10 @@ void run_calibrate(CalibrateSettings settings) {
       {"weak_direction_shrink", settings.shrink},
       {"static_pose_sd_deg",
        settings.static_pose ? nlohmann::json(settings.static_sd_deg) : nlohmann::json(nullptr)},
+      {"static_pose", settings.static_pose ? nlohmann::json(static_posture_text(calibrated, settings))
+                                           : nlohmann::json(nullptr)},
+      {"static_posture",
+       settings.static_pose ? nlohmann::json(settings.static_posture) : nlohmann::json(nullptr)},
       {"segment_scale", calibration.segment_scale},
       {"passes", passes},
       {"mean_marker_distance_before_mm", calibration.mean_marker_distance_before_mm},
@@ -86,8 +90,11 @@ void run_calibrate(CalibrateSettings settings) {
             << " mm (" << height_source << "); mean marker distance "
             << fixed_text(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
             << fixed_text(calibration.mean_marker_distance_after_mm, 1) << " mm after " << settings.iterations
-            << " calibration iteration(s).\nWrote " << settings.out << ", " << osim->path().string()
-            << " and " << report_path << ".\n";
+            << " calibration iteration(s)"
+            << (settings.static_pose ? "; static trial in the " + static_posture_text(calibrated, settings)
+                                     : "")
+            << ".\nWrote " << settings.out << ", " << osim->path().string() << " and " << report_path
+            << ".\n";
 }
 
 const RegisterCommand calibrate_registration{
@@ -114,12 +121,21 @@ const RegisterCommand calibrate_registration{
                      "a direction keeps mu / (mu + C) of the data's step (default 0.03; 0: none)")
           ->check(CLI::Range(0.0, 1e6));
       app.add_flag("--static", settings->static_pose,
-                   "the recording is a static trial in the model's zero pose (standing upright, arms "
-                   "hanging, every joint angle 0, as `s2kf model` draws it): the posture fixes the "
-                   "markers' placement about the joints that no moving recording can tell");
+                   "the recording is a static trial, the subject standing still in a reference pose "
+                   "(--static-pose): the posture fixes the markers' placement about the joints that no "
+                   "moving recording can tell");
+      app.add_option("--static-pose", settings->static_pose_name,
+                     "with --static: the pose held, zero (upright, arms hanging, as `s2kf model` draws "
+                     "it), t-pose, a-pose, or a pose CSV (its first row); default: the one nearest the "
+                     "tracked posture");
       app.add_option("--static-sd", settings->static_sd_deg,
-                     "with --static: how far (SD, degrees) each joint may be from the zero pose (default 3)")
+                     "with --static: how far (SD, degrees) each joint may be from the reference pose "
+                     "(default 3)")
           ->check(CLI::Range(0.1, 90.0));
+      app.add_option("--static-posture", settings->static_posture,
+                     "with --static: near (default: the posture held is estimated within --static-sd of "
+                     "the reference pose) or exact (every frame within --static-sd of it)")
+          ->check(CLI::IsMember({"near", "exact"}));
       app.add_flag("!--uniform-noise", settings->noise_from_calibration,
                    "write no per-marker noise into the subject file (default: each marker's noise_mm "
                    "follows its calibration residual, 0.5-2 times the tracker's common 10 mm)");

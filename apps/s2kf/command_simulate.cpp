@@ -1,9 +1,11 @@
 // `s2kf simulate`: a synthetic recording with ground truth (C3D + _truth.csv + _clean.csv).
 #include <s2kf/app/bundled_motions.hpp>
 #include "command.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/motion_json.hpp>
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_set.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/motion_files.hpp>
@@ -75,6 +77,7 @@ struct Settings {
   std::vector<std::string> blackouts;
   std::vector<std::string> dropouts;
   std::string out;
+  std::string markerset;  // empty: the model's own 50 markers
   bool list = false;
 };
 
@@ -127,7 +130,12 @@ void run(const Settings& settings) {
   subject_options.placement_sd_mm = settings.placement_mm;
   subject_options.soft_tissue_mm = settings.soft_tissue_mm;
   subject_options.segment_scale_sd = settings.segment_scale_sd;
-  const auto base = s2kf::body::mmm_body_model(settings.height_mm);
+  auto base = s2kf::body::mmm_body_model(settings.height_mm);
+  // The subject wears another set (Plug-in Gait, CMU): its labels and places.
+  if (!settings.markerset.empty())
+    base = s2kf::body::apply_marker_set(s2kf::body::mmm_body_model(1000),
+                                        s2kf::app::resolve_marker_set(settings.markerset))
+               .scaled(settings.height_mm);
   const s2kf::sim::Subject subject = s2kf::sim::make_subject(base, subject_options, settings.seed);
 
   const fs::path motion_file = resolve_motion(settings.motion);
@@ -193,6 +201,9 @@ const s2kf::cli::RegisterCommand simulate_registration{
                      "Hide the markers of one segment: SEGMENT,START_S,DURATION_S (repeatable)");
       app.add_option("--out", settings->out,
                      "Output C3D file; FILE_truth.csv and FILE_clean.csv go beside it");
+      app.add_option("--markerset", settings->markerset,
+                     "the markers the subject wears: a bundled marker set (kit, cmu, plugin_gait) or a "
+                     ".json file (default: the model's own 50)");
       app.add_flag("--list", settings->list, "List the bundled motions");
       app.callback([settings] { run(*settings); });
     }};

@@ -25,8 +25,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// --static: the subject calibrated on the static trial in the model's zero pose (as `s2kf
-/// calibrate STATIC --static` does), written to `path` as a subject file before any recording is
+/// --static: the subject calibrated on the static trial in its reference pose (as `s2kf calibrate
+/// STATIC --static` does), written to `path` as a subject file before any recording is
 /// tracked with it.
 void calibrate_on_static_trial(const TrackSettings& settings, const std::string& path) {
   const app::TrackRequest& request = settings.request;
@@ -38,8 +38,9 @@ void calibrate_on_static_trial(const TrackSettings& settings, const std::string&
   const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
   std::cout << fs::path(request.static_trial).filename().string() << " (static trial): mean marker distance "
             << fixed_text(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
-            << fixed_text(calibration.mean_marker_distance_after_mm, 1)
-            << " mm after calibrating in the zero pose; wrote " << path << "\n";
+            << fixed_text(calibration.mean_marker_distance_after_mm, 1) << " mm after calibrating in the "
+            << static_posture_text(calibrated, app::static_trial_settings(request)) << "; wrote " << path
+            << "\n";
 }
 
 void run_track(const TrackSettings& given) {
@@ -77,8 +78,15 @@ void run_track(const TrackSettings& given) {
                                          .string()
                                    : prefixes[0] + "_subject.json";
     calibrate_on_static_trial(settings, path);
-    request.subject = path;
-    request.markerset.clear();
+    if (request.static_refine) {  // the subject as the marker set the recording is calibrated from
+      request.markerset = path;
+      request.subject.clear();
+      request.static_refine = false;
+      request.static_stretch = false;  // the static trial was given
+    } else {
+      request.subject = path;
+      request.markerset.clear();
+    }
     request.static_trial.clear();
   }
   if (!batch) {
@@ -89,7 +97,7 @@ void run_track(const TrackSettings& given) {
       outcome = track_file(todo[0].input, prefixes[0], settings, terminal);  // every core calibrates
     } catch (...) {
       // The run wrote nothing of the recording's: the subject file --static wrote for it goes too.
-      if (!static_trial.empty()) fs::remove(request.subject);
+      if (!static_trial.empty()) fs::remove(request.subject.empty() ? request.markerset : request.subject);
       throw;
     }
     if (!settings.quiet) std::cout << outcome.paragraph << "\n";
@@ -138,13 +146,30 @@ const RegisterCommand track_registration{
       app.add_option("--subject", settings->request.subject,
                      "calibrated subject file written by s2kf calibrate");
       app.add_option("--static", settings->request.static_trial,
-                     "C3D static trial of the same subject in the model's zero pose (standing upright, "
-                     "arms hanging, every joint angle 0): calibrate the subject on it first (as s2kf "
-                     "calibrate --static, written as PREFIX_subject.json) and track with it, which also "
-                     "fixes the placement no moving recording shows (hands, forearms, feet)");
+                     "C3D static trial of the same subject standing still in a reference pose "
+                     "(--static-pose): calibrate the subject on it first (as s2kf calibrate --static, "
+                     "written as PREFIX_subject.json) and track with it, which also fixes the placement "
+                     "no moving recording shows (hands, forearms, feet)");
       app.add_option("--static-sd", settings->request.static_sd_deg,
-                     "with --static: how far (SD, degrees) each joint may be from the zero pose")
+                     "with --static or a static stretch: how far (SD, degrees) each joint may be from the "
+                     "reference pose")
           ->check(CLI::Range(0.1, 90.0));
+      app.add_option("--static-pose", settings->request.static_pose,
+                     "the pose held in the static trial (--static, or a static stretch): zero, t-pose, "
+                     "a-pose or a pose CSV (its first row); default: the one nearest the tracked posture");
+      app.add_option("--static-posture", settings->request.static_posture,
+                     "near (the posture held is estimated within --static-sd of the reference pose) or "
+                     "exact (every frame within --static-sd of it)")
+          ->check(CLI::IsMember({"near", "exact"}));
+      app.add_flag("--static-refine", settings->request.static_refine,
+                   "with --static: calibrate again on each recording, starting from the static trial's "
+                   "subject (the motion corrects the joint centres; the directions it cannot see stay "
+                   "the static trial's)")
+          ->needs("--static");
+      app.add_flag("!--no-static-stretch", settings->request.static_stretch,
+                   "without --static: do not take a stretch of the recording in which the subject stands "
+                   "still (1 s or more) in a reference pose as its static trial (default: it is, and "
+                   "the calibration on the recording starts from the subject calibrated there)");
       app.add_flag("!--no-calibrate", settings->request.calibrate,
                    "track with the marker set as it is (default: calibrate marker offsets and bone lengths "
                    "on stretches of frames spread over the recording)");

@@ -30,6 +30,7 @@
 #include <s2kf/body/marker_set_labels.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/body/pose.hpp>
+#include <s2kf/body/reference_poses.hpp>
 #include <s2kf/body/pose_columns.hpp>
 #include <s2kf/body/segment_inertia.hpp>
 #include <s2kf/body/vector_sincos.hpp>
@@ -80,7 +81,9 @@
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
 
+#include <s2kf/calibration/calibration_check.hpp>
 #include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/calibration/static_stretch.hpp>
 #include <s2kf/calibration/subject_calibration.hpp>
 
 #include <s2kf/pipeline/session.hpp>

@@ -334,7 +334,9 @@ void bind_track(py::module_& module) {
       "track",
       [](const py::object& recording, const py::object& labels, const py::object& rate,
          const py::object& markerset, const py::object& subject, const py::object& static_trial,
-         double static_sd, bool calibrate, std::int64_t calibration_frames, int calibration_samples,
+         double static_sd, const py::object& static_pose, const std::string& static_posture,
+         bool static_refine, bool static_stretch, bool calibrate, std::int64_t calibration_frames,
+         int calibration_samples,
          double calibration_shrink, bool uniform_noise, bool smooth, int samples, double height,
          const py::object& height_mm, const std::string& preset, const std::string& motion_model,
          const std::string& gain, const std::string& method, const py::object& truth,
@@ -348,6 +350,10 @@ void bind_track(py::module_& module) {
         request.subject = text(subject);
         request.static_trial = text(static_trial);
         request.static_sd_deg = static_sd;
+        request.static_pose = text(static_pose);
+        request.static_posture = static_posture;
+        request.static_refine = static_refine;
+        request.static_stretch = static_stretch;
         request.calibrate = calibrate;
         request.calibration_frames = static_cast<long>(calibration_frames);
         request.calibration_samples = calibration_samples;
@@ -366,7 +372,9 @@ void bind_track(py::module_& module) {
       },
       py::arg("recording"), py::arg("labels") = py::none(), py::arg("rate") = py::none(), py::kw_only(),
       py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("static") = py::none(),
-      py::arg("static_sd") = defaults.static_sd_deg, py::arg("calibrate") = defaults.calibrate,
+      py::arg("static_sd") = defaults.static_sd_deg, py::arg("static_pose") = py::none(),
+      py::arg("static_posture") = defaults.static_posture, py::arg("static_refine") = defaults.static_refine,
+      py::arg("static_stretch") = defaults.static_stretch, py::arg("calibrate") = defaults.calibrate,
       py::arg("calibration_frames") = defaults.calibration_frames,
       py::arg("calibration_samples") = defaults.calibration_samples,
       py::arg("calibration_shrink") = defaults.calibration_shrink,
@@ -380,8 +388,12 @@ void bind_track(py::module_& module) {
       "underscores, the same defaults): track('walk.c3d'), track(s2kf.read_c3d(...)), or track(points, "
       "labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
       "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "
-      "static: a C3D static trial in the model's zero pose, on which the subject is calibrated first "
-      "(static_sd: each joint's SD from the zero pose there, degrees); calibrate: fit the subject's "
+      "static: a C3D static trial, on which the subject is calibrated first (static_pose: the pose held, "
+      "'zero', 't-pose', 'a-pose' or a pose CSV, default: the nearest one; static_sd: each joint's SD "
+      "from it, degrees; static_posture: 'near', the posture held estimated near the pose, or 'exact'; "
+      "static_refine: calibrate again on the recording from that subject); static_stretch: without "
+      "static, a stretch of the recording where the subject stands still in a reference pose is its "
+      "static trial; calibrate: fit the subject's "
       "offsets and bone lengths on calibration_frames frames spread over the recording (calibration_samples: "
       "the samples of its tracking pass, 0: samples); calibration_shrink: C, a weakly seen offset direction "
       "keeps mu / (mu + C) of the data's step; uniform_noise: every marker the same noise (else each its "
@@ -393,8 +405,9 @@ void bind_track(py::module_& module) {
 
   module.def(
       "calibrate",
-      [](const py::object& recording, const py::object& out, bool static_pose, double static_sd,
-         const py::object& markerset, double height_mm, std::int64_t frames, bool uniform_noise) {
+      [](const py::object& recording, const py::object& out, bool static_trial, double static_sd,
+         const py::object& static_pose, const std::string& static_posture, const py::object& markerset,
+         double height_mm, std::int64_t frames, bool uniform_noise) {
         app::SubjectSettings settings;
         settings.markerset = markerset.is_none() ? std::string() : py::str(markerset).cast<std::string>();
         if (height_mm != 0 && !(height_mm >= 300 && height_mm <= 3000))
@@ -406,18 +419,24 @@ void bind_track(py::module_& module) {
         settings.height_mm = height_mm;
         settings.frames = static_cast<long>(frames);
         settings.noise_from_calibration = !uniform_noise;
-        settings.static_pose = static_pose;
+        if (static_posture != "near" && static_posture != "exact")
+          throw py::value_error("static_posture must be 'near' or 'exact', not '" + static_posture + "'");
+        settings.static_pose = static_trial;
         settings.static_sd_deg = static_sd;
+        settings.static_pose_name = static_pose.is_none() ? std::string() : py::str(static_pose).cast<std::string>();
+        settings.static_pose_option = "static_pose";
+        settings.static_posture = static_posture;
         settings.threads = app::every_core();
         return calibrate(recording, out, settings);
       },
       py::arg("recording"), py::kw_only(), py::arg("out") = py::none(), py::arg("static") = false,
-      py::arg("static_sd") = 3.0, py::arg("markerset") = py::none(), py::arg("height_mm") = 0.0,
+      py::arg("static_sd") = 3.0, py::arg("static_pose") = py::none(), py::arg("static_posture") = "near",
+      py::arg("markerset") = py::none(), py::arg("height_mm") = 0.0,
       py::arg("frames") = 1200, py::arg("uniform_noise") = false,
       "Estimates a subject's marker offsets and bone lengths from a C3D recording as `s2kf calibrate` does "
       "and returns the subject file's document (a dict); out: also write it there (for track(subject=...) "
-      "or `s2kf track --subject`). static: the recording is a static trial in the model's zero pose "
-      "(static_sd: each joint's SD from it, degrees); markerset: as in track; frames: frames used at "
+      "or `s2kf track --subject`). static: the recording is a static trial (static_pose, static_sd, "
+      "static_posture: as in track); markerset: as in track; frames: frames used at "
       "most; uniform_noise: write no per-marker noise. Runs without the GIL.");
 }
 

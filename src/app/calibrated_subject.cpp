@@ -3,9 +3,11 @@
 
 #include <s2kf/app/track_summary.hpp>  // fixed_text
 
+#include <s2kf/body/reference_poses.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>
+#include <s2kf/io/motion_files.hpp>
 
 #include <algorithm>
 #include <filesystem>
@@ -14,11 +16,14 @@
 
 namespace s2kf::app {
 
+namespace fs = std::filesystem;
+
 CalibratedSubject calibrate_subject(FrameSource& source, const std::string& input,
                                     const SubjectSettings& settings, const SampleSet& samples,
                                     const std::string& name) {
   CalibratedSubject result;
-  result.choice = choose_marker_set_for(source.labels(), settings.markerset, "");
+  result.choice = settings.set ? MarkerSetChoice{*settings.set, "given"}
+                               : choose_marker_set_for(source.labels(), settings.markerset, "");
   pipeline::SessionOptions options;
   options.height_mm = settings.height_mm;
   options.fallback_height_mm = 0;  // a subject file needs a real height: refuse instead
@@ -31,8 +36,17 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
   options.calibration.estimate_segment_scales = !settings.no_scales;
   options.calibration.weak_direction_shrink = settings.shrink;
   options.noise_from_calibration = settings.noise_from_calibration;
-  if (settings.static_pose)
+  if (settings.static_pose) {
     options.calibration.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
+    options.calibration.static_posture_estimated = settings.static_posture == "near";
+    const body::BodyModel base = body::mmm_body_model(1000);
+    if (settings.static_pose_name.empty())
+      for (const std::string& name : body::reference_pose_names())
+        options.calibration.static_pose_candidates.push_back(body::reference_pose(base, name));
+    else
+      options.calibration.static_pose =
+          static_reference_pose(base, settings.static_pose_name, settings.static_pose_option);
+  }
   try {
     result.session = pipeline::prepare_session(source, result.choice.set, options, samples);
   } catch (const std::invalid_argument& e) {
@@ -58,15 +72,69 @@ CalibratedSubject calibrate_subject_file(const std::string& path, const std::str
 }
 
 SubjectSettings static_trial_settings(const std::string& markerset, double height_mm,
-                                      bool noise_from_calibration, double static_sd_deg) {
+                                      bool noise_from_calibration, double static_sd_deg,
+                                      const std::string& static_pose_name,
+                                      const std::string& static_posture) {
   SubjectSettings settings;
   settings.markerset = markerset;
   settings.height_mm = height_mm;
   settings.noise_from_calibration = noise_from_calibration;
   settings.static_pose = true;
   settings.static_sd_deg = static_sd_deg;
+  settings.static_pose_name = static_pose_name;
+  settings.static_posture = static_posture;
   settings.threads = every_core();
   return settings;
+}
+
+Eigen::VectorXd static_reference_pose(const body::BodyModel& model, const std::string& name,
+                                      const std::string& option) {
+  const std::vector<std::string> names = body::reference_pose_names();
+  if (std::find(names.begin(), names.end(), name) != names.end()) return body::reference_pose(model, name);
+  if (!fs::exists(name))
+    throw UserError(option + ": '" + name + "' is neither zero, t-pose, a-pose nor an existing pose CSV");
+  io::MotionTable table;
+  try {
+    table = io::load_motion_csv(name);
+  } catch (const std::exception& e) {
+    throw UserError(option + ": " + name + ": " + e.what());
+  }
+  if (table.frames() == 0) throw UserError(option + ": " + name + " holds no pose row");
+  Eigen::VectorXd joints(model.joint_count());
+  for (int j = 0; j < model.joint_count(); ++j) {
+    const auto found = std::find(table.joint_names.begin(), table.joint_names.end(), model.joints[j].name);
+    if (found == table.joint_names.end())
+      throw UserError(option + ": " + name + " has no column " + model.joints[j].name +
+                      " (a pose CSV needs every joint, as s2kf track writes them)");
+    joints(j) = table.values(0, body::kRootValues + (found - table.joint_names.begin()));
+  }
+  if (!joints.allFinite())
+    throw UserError(option + ": " + name + ": the first row's joint angles are not all numbers");
+  return joints;
+}
+
+std::string static_posture_text(const CalibratedSubject& calibrated, const SubjectSettings& settings) {
+  const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
+  std::string pose = settings.static_pose_name;
+  if (pose.empty() && calibration.static_pose_choice >= 0)
+    pose = body::reference_pose_names()[static_cast<std::size_t>(calibration.static_pose_choice)] +
+           " (found from the data)";
+  if (calibration.static_posture.size() == 0) return pose;
+  const Eigen::VectorXd reference =
+      calibration.static_pose_choice >= 0
+          ? body::reference_pose(
+                calibration.model,
+                body::reference_pose_names()[static_cast<std::size_t>(calibration.static_pose_choice)])
+          : static_reference_pose(calibration.model,
+                                  settings.static_pose_name.empty() ? "zero" : settings.static_pose_name,
+                                  settings.static_pose_option);
+  const Eigen::VectorXd off = (calibration.static_posture - reference) * kDegreesPerRadian;
+  Eigen::Index worst = 0;
+  off.cwiseAbs().maxCoeff(&worst);
+  return pose + ", posture held " +
+         fixed_text(std::sqrt(off.squaredNorm() / static_cast<double>(off.size())), 1) +
+         " deg RMS from it (most " + calibration.model.joints[static_cast<std::size_t>(worst)].name + ", " +
+         fixed_text(off(worst), 1) + " deg)";
 }
 
 void write_subject_file(const std::string& path, const nlohmann::json& document) {

@@ -4,6 +4,7 @@
 #include <s2kf/app/calibrated_subject.hpp>
 #include <s2kf/app/inferred_marker_set.hpp>
 #include <s2kf/app/sample_sets.hpp>
+#include <s2kf/app/static_stretch_subject.hpp>
 #include <s2kf/app/track_summary.hpp>
 #include <s2kf/app/user_error.hpp>
 
@@ -94,6 +95,12 @@ void check_request(const TrackRequest& r) {
   if (!r.static_trial.empty() && !r.subject.empty())
     throw UserError("give " + name("static") + " or " + name("subject") + ", not both (" + name("static") +
                     " calibrates the subject on the static trial)");
+  if (!one_of(r.static_posture, {"near", "exact"}))
+    throw UserError(name("static-posture") + " must be " + choices({"near", "exact"}) + ", not '" +
+                    r.static_posture + "'");
+  if (r.static_refine && r.static_trial.empty())
+    throw UserError(name("static-refine") + " calibrates again from the static trial's subject; it needs " +
+                    name("static"));
   if (!r.static_trial.empty() && !r.calibrate)
     throw UserError(name("static") +
                     " calibrates the subject on the static trial; it cannot be combined with " +
@@ -117,7 +124,9 @@ pipeline::SessionOptions session_options(const TrackRequest& request, double rat
   pipeline::SessionOptions options;
   options.tracker = tracker_options(request, rate_hz);
   options.height_mm = request.height_mm;
-  options.calibrate = request.calibrate && request.subject.empty() && request.static_trial.empty();
+  // With a static trial the recording is calibrated again only when asked (static_refine).
+  options.calibrate =
+      request.calibrate && request.subject.empty() && (request.static_trial.empty() || request.static_refine);
   options.calibration_frames = request.calibration_frames;
   options.calibration.weak_direction_shrink = request.calibration_shrink;
   options.calibration.threads = request.calibration_threads > 0 ? request.calibration_threads : every_core();
@@ -157,8 +166,8 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   pipeline::SessionOptions options = session_options(request, source.rate_hz());
   prepared.samples = cached_sample_set(46, request.samples);
   if (!request.static_trial.empty()) {
-    // The subject calibrated on the static trial in the model's zero pose (`s2kf calibrate
-    // --static`), then the recording tracked with it as with a subject file.
+    // The subject calibrated on the static trial (`s2kf calibrate --static`), then the recording
+    // tracked with it as with a subject file, or calibrated again from it (static_refine).
     const CalibratedSubject calibrated = calibrate_static_trial(
         request, prepared.samples, std::filesystem::path(input).stem().string() + "_subject");
     prepared.choice.set = calibrated.subject;
@@ -171,6 +180,13 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   }
   if (options.calibrate && request.calibration_samples > 0 && request.calibration_samples != request.samples)
     options.calibration_samples = cached_sample_set(46, request.calibration_samples);
+  std::string stretch_message;  // a static trial found inside the recording (static_stretch_subject.hpp)
+  if (request.static_stretch && options.calibrate && request.static_trial.empty() && frames > 0) {
+    StretchSubject stretch = static_stretch_subject(source, input, prepared.choice, request, prepared.samples,
+                                                    options.calibration.threads);
+    if (stretch.subject) prepared.choice.set = std::move(*stretch.subject);
+    stretch_message = stretch.message;
+  }
   pipeline::Session& session = prepared.session;
   try {
     session = pipeline::prepare_session(source, prepared.choice.set, options, prepared.samples);
@@ -193,6 +209,8 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   prepared.warnings = recording.file_warnings;
   prepared.warnings.insert(prepared.warnings.end(), session.warnings.begin(), session.warnings.end());
   prepared.messages = marker_set_messages(prepared.choice, session.mapping);
+  if (!stretch_message.empty())
+    prepared.messages.push_back(std::filesystem::path(input).filename().string() + ": " + stretch_message);
   return prepared;
 }
 
@@ -243,12 +261,18 @@ nlohmann::json summarize_track(const PreparedTrack& prepared, const track::Track
   return summary;
 }
 
+SubjectSettings static_trial_settings(const TrackRequest& request) {
+  SubjectSettings settings =
+      static_trial_settings(request.markerset, request.height_mm, !request.uniform_noise, request.static_sd_deg,
+                            request.static_pose, request.static_posture);
+  settings.static_pose_option = option_name(request, "static-pose");
+  return settings;
+}
+
 CalibratedSubject calibrate_static_trial(const TrackRequest& request, const SampleSet& samples,
                                          const std::string& name) {
   return calibrate_subject_file(request.static_trial, option_name(request, "static"),
-                                static_trial_settings(request.markerset, request.height_mm,
-                                                      !request.uniform_noise, request.static_sd_deg),
-                                samples, name);
+                                static_trial_settings(request), samples, name);
 }
 
 }  // namespace s2kf::app

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -21,15 +22,23 @@ namespace s2kf::app {
 
 /// The options of `s2kf calibrate` (and of `s2kf track --static`, which calibrates in the zero pose).
 struct SubjectSettings {
-  std::string markerset;  ///< empty: the bundled set that matches best
-  double height_mm = 0;   ///< 0: estimate
+  std::string markerset;               ///< empty: the bundled set that matches best
+  std::optional<body::MarkerSet> set;  ///< the marker set itself, chosen already (markerset is then unused)
+  double height_mm = 0;                ///< 0: estimate
   int iterations = 1;
   long frames = 1200;
   bool no_scales = false;
   double shrink = calibration::CalibrationOptions{}.weak_direction_shrink;
   bool noise_from_calibration = true;
-  bool static_pose = false;  ///< a static trial in the model's zero pose
+  bool static_pose = false;  ///< a static trial
+  /// The posture held there: zero, t-pose, a-pose or a pose CSV (its first row); empty: the
+  /// reference pose nearest the tracked posture.
+  std::string static_pose_name;
+  std::string static_pose_option = "--static-pose";  ///< names the pose in messages
   double static_sd_deg = 3.0;
+  /// "near": static_sd_deg is the SD of the posture held over the trial (estimated near the
+  /// reference); "exact": of every frame's angles (the reference taken as held).
+  std::string static_posture = "near";
   int threads = 1;  ///< the calibration's threads (every_core() for all)
 };
 
@@ -59,7 +68,18 @@ CalibratedSubject calibrate_subject_file(const std::string& path, const std::str
 /// The settings of a static trial's calibration in the model's zero pose, with every core (`s2kf
 /// track --static`, `s2kf.track(static=...)`).
 SubjectSettings static_trial_settings(const std::string& markerset, double height_mm,
-                                      bool noise_from_calibration, double static_sd_deg);
+                                      bool noise_from_calibration, double static_sd_deg,
+                                      const std::string& static_pose_name = "",
+                                      const std::string& static_posture = "near");
+
+/// The static trial's reference pose named `name` (zero, t-pose, a-pose, or a pose CSV whose first
+/// row is used) for `model`; a UserError naming `option` for anything else.
+Eigen::VectorXd static_reference_pose(const body::BodyModel& model, const std::string& name,
+                                      const std::string& option);
+
+/// What the calibration found of a static trial: the reference pose and how far the posture
+/// held was from it, for messages and reports.
+std::string static_posture_text(const CalibratedSubject& calibrated, const SubjectSettings& settings);
 
 /// The subject file's document: the marker set, described with the recording it came from and
 /// the calibration's mean marker distance before and after.

@@ -35,8 +35,18 @@ struct TrackRequest {
   // The marker set: at most one of markerset, subject, static_trial.
   std::string markerset;       ///< a bundled set's name or a .json file; empty: the best bundled match
   std::string subject;         ///< a calibrated subject file (`s2kf calibrate`)
-  std::string static_trial;    ///< a C3D static trial in the zero pose: the subject is calibrated on it first
-  double static_sd_deg = 3.0;  ///< how far (SD, degrees) each joint may be from the zero pose there
+  std::string static_trial;  ///< a C3D static trial: the subject is calibrated on it first
+  double static_sd_deg = 3.0;  ///< how far (SD, degrees) each joint may be from the reference pose there
+  /// The pose held in the static trial (or a static stretch): zero, t-pose, a-pose or a pose CSV
+  /// (its first row); empty: the reference pose nearest the tracked posture.
+  std::string static_pose;
+  /// "near": the posture held is estimated within static_sd_deg of the reference pose; "exact":
+  /// every frame's angles within static_sd_deg of it.
+  std::string static_posture = "near";
+  bool static_refine = false;  ///< calibrate again on the recording, starting from the static trial's subject
+  /// Without a static trial: a stretch of the recording in which the subject stands still in a
+  /// reference pose is its static trial, and the recording's calibration starts from it.
+  bool static_stretch = true;
   double height_mm = 0;        ///< 0: the marker set's, else estimated from rigid marker pairs
   // The subject's calibration on the recording itself (not with a subject or static trial).
   bool calibrate = true;
@@ -114,8 +124,11 @@ nlohmann::json summarize_track(const PreparedTrack& prepared, const track::Track
                                const TrackRequest& request, const io::MotionTable* motion = nullptr,
                                const track::StageTimes& outside = {});
 
-/// The subject calibrated on the request's static trial in the model's zero pose (as `s2kf
-/// calibrate --static`), named `name`, with every core.
+/// The settings of the request's static trial (or static stretch): its pose, SD and posture.
+SubjectSettings static_trial_settings(const TrackRequest& request);
+
+/// The subject calibrated on the request's static trial in the pose it names (or the one found
+/// from the data), as `s2kf calibrate --static`, named `name`, with every core.
 CalibratedSubject calibrate_static_trial(const TrackRequest& request, const SampleSet& samples,
                                          const std::string& name);
 

@@ -66,7 +66,8 @@ struct BundleFrame {
 
 /// RMS distance (mm) per model marker between the recording and `model` at the frames' poses,
 /// over each frame's listed markers (indices into `used`); NaN for a marker no frame lists.
-inline std::vector<double> marker_residual_rms(const body::BodyModel& model, const body::MarkerMapping& mapping,
+inline std::vector<double> marker_residual_rms(const body::BodyModel& model,
+                                               const body::MarkerMapping& mapping,
                                                const MarkerSequence& recording, const std::vector<int>& used,
                                                const std::vector<BundleFrame>& frames) {
   std::vector<double> sum(static_cast<std::size_t>(model.marker_count()), 0.0);
@@ -92,10 +93,14 @@ inline std::vector<double> marker_residual_rms(const body::BodyModel& model, con
 /// `used`) the recording shows there and, with `static_prior`, the static trial's prior at the zero
 /// pose; frames with fewer than 3 such markers are left out. Throws std::invalid_argument for a
 /// frame outside the recording or a pose with another joint count than `joint_count`.
-inline std::vector<BundleFrame> frames_at_poses(const body::MarkerMapping& mapping, const MarkerSequence& recording,
-                                                const std::vector<int>& used,
+inline std::vector<BundleFrame> frames_at_poses(const body::MarkerMapping& mapping,
+                                                const MarkerSequence& recording, const std::vector<int>& used,
                                                 const std::vector<std::pair<long, body::Pose>>& poses,
-                                                Eigen::Index joint_count, bool static_prior) {
+                                                Eigen::Index joint_count, bool static_prior,
+                                                const Eigen::VectorXd& static_pose = {}) {
+  const Eigen::VectorXd reference = static_pose.size() > 0 ? static_pose : Eigen::VectorXd::Zero(joint_count);
+  if (static_prior && reference.size() != joint_count)
+    throw std::invalid_argument("calibration: the static pose has another joint count than the model");
   std::vector<BundleFrame> frames;
   for (const auto& [index, pose] : poses) {
     if (index < 0 || index >= recording.frame_count())
@@ -110,10 +115,42 @@ inline std::vector<BundleFrame> frames_at_poses(const body::MarkerMapping& mappi
         frame.markers.push_back(static_cast<int>(u));
     }
     if (frame.markers.size() < 3) continue;
-    if (static_prior) frame.prior_joints = Eigen::VectorXd::Zero(joint_count);
+    if (static_prior) frame.prior_joints = reference;
     frames.push_back(std::move(frame));
   }
   return frames;
+}
+
+/// The frames' mean joint angles.
+inline Eigen::VectorXd mean_joints(const std::vector<BundleFrame>& frames) {
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(frames.empty() ? 0 : frames.front().joints.size());
+  for (const BundleFrame& frame : frames) sum += frame.joints;
+  return frames.empty() ? sum : Eigen::VectorXd(sum / static_cast<double>(frames.size()));
+}
+
+/// The static trial's reference pose: options.static_pose (the zero pose when empty), or of the
+/// candidates the one nearest (RMS over the joints) the tracked frames' mean posture; `choice` is
+/// its index, -1 for static_pose.
+inline Eigen::VectorXd choose_static_pose(const CalibrationOptions& options,
+                                          const std::vector<BundleFrame>& frames, Eigen::Index joint_count,
+                                          int& choice) {
+  choice = -1;
+  if (options.static_pose_candidates.empty()) {
+    if (options.static_pose.size() == 0) return Eigen::VectorXd::Zero(joint_count);
+    if (options.static_pose.size() != joint_count)
+      throw std::invalid_argument("calibration: the static pose has another joint count than the model");
+    return options.static_pose;
+  }
+  const Eigen::VectorXd posture = mean_joints(frames);
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t c = 0; c < options.static_pose_candidates.size(); ++c) {
+    const Eigen::VectorXd& candidate = options.static_pose_candidates[c];
+    if (candidate.size() != joint_count)
+      throw std::invalid_argument("calibration: a static pose has another joint count than the model");
+    const double distance = (candidate - posture).squaredNorm();
+    if (distance < best) best = distance, choice = static_cast<int>(c);
+  }
+  return options.static_pose_candidates[static_cast<std::size_t>(choice)];
 }
 
 /// Tracks all frames; returns the poses of the frames usable for calibration and the pass's mean
@@ -243,6 +280,7 @@ class BundleAdjustment {
                                               Eigen::VectorXd& prior_sd) {
     scale_weight_ = static_cast<double>(frames.size()) /
                     (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
+    pose_prior_frames_ = frames.size();
     NormalEquations normal;
     linearise_all(model, frames, normal);
     return whitened_information(normal, prior_sd);
@@ -254,6 +292,7 @@ class BundleAdjustment {
     // too, and would otherwise carry the weakly observed lengths (lumbar, trunk) far off.
     scale_weight_ = static_cast<double>(frames.size()) /
                     (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
+    pose_prior_frames_ = frames.size();
     const double before = cost(model, frames, cumulative_);
     long residuals = 0;
     for (const BundleFrame& frame : frames) residuals += static_cast<long>(frame.markers.size());
@@ -348,8 +387,10 @@ class BundleAdjustment {
     return sum;
   }
 
+  /// Per frame; with static_posture_estimated the frames share one prior's weight.
   double pose_prior_weight() const {
-    return 1.0 / (options_.static_pose_sd_rad * options_.static_pose_sd_rad);
+    const double frames = options_.static_posture_estimated ? std::max<double>(pose_prior_frames_, 1) : 1.0;
+    return 1.0 / (options_.static_pose_sd_rad * options_.static_pose_sd_rad * frames);
   }
 
   /// The used markers' offsets minus the marker set's, stacked as the subject unknowns order them.
@@ -691,6 +732,7 @@ class BundleAdjustment {
   Eigen::MatrixXd shrink_;     ///< the weak-direction shrinkage prior on the offsets; empty: none
   int scales_ = 0, unknowns_ = 0;
   double scale_weight_ = 0;
+  std::size_t pose_prior_frames_ = 1;  ///< frames the adjustment holds (the posture's prior shares them)
 };
 
 }  // namespace detail

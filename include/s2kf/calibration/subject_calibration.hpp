@@ -9,11 +9,11 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/marker_sequence.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
@@ -94,6 +94,17 @@ struct CalibrationOptions {
   /// turned about its joint against a constant offset of that joint's angles (the gauges), where
   /// otherwise the marker set's placement decides it. 0: no prior on the poses.
   double static_pose_sd_rad = 0;
+  /// The static trial's reference pose (joint angles, rad); empty: the zero pose. With more than one
+  /// in static_pose_candidates, the one nearest the first tracking pass's mean posture.
+  Eigen::VectorXd static_pose;
+  /// Reference poses to choose the static trial's from (the posture found from the data); empty:
+  /// static_pose.
+  std::vector<Eigen::VectorXd> static_pose_candidates;
+  /// true: static_pose_sd_rad is the SD of the posture held over the whole trial, not of each
+  /// frame's: the prior is counted once over the frames, so their common posture is estimated
+  /// near the reference (traded against the offsets' prior) and their sway follows the markers.
+  /// false: every frame's angles are held within the SD of the reference.
+  bool static_posture_estimated = false;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
   int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
   /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
@@ -122,6 +133,10 @@ struct CalibrationOptions {
       throw std::invalid_argument("calibration: the weak-direction shrinkage must be finite and >= 0");
     if (!(static_pose_sd_rad >= 0) || !std::isfinite(static_pose_sd_rad))
       throw std::invalid_argument("calibration: the static pose's SD must be finite and >= 0");
+    if (!static_pose.allFinite())
+      throw std::invalid_argument("calibration: the static pose has a non-finite angle");
+    for (const Eigen::VectorXd& pose : static_pose_candidates)
+      if (!pose.allFinite()) throw std::invalid_argument("calibration: a static pose has a non-finite angle");
     if (skip_frames < 0 || stride < 1)
       throw std::invalid_argument("calibration: skip_frames >= 0 and stride >= 1");
     if (threads < 1) throw std::invalid_argument("calibration: at least 1 thread is needed");
@@ -162,6 +177,10 @@ struct SubjectCalibration {
   /// adjusted poses of the last bundle adjustment (its inlier residuals); NaN for a marker the
   /// adjustment did not see.
   std::vector<double> marker_residual_rms_mm;
+  /// A static trial's: the reference pose used (index into static_pose_candidates, -1 for
+  /// static_pose) and the posture estimated, the adjusted frames' mean joint angles (rad).
+  int static_pose_choice = -1;
+  Eigen::VectorXd static_posture;
 };
 
 /// Calibrates `model` (a base model after apply_marker_set, scaled to the subject's height) on a
@@ -171,8 +190,9 @@ struct SubjectCalibration {
 /// bone-length factors and marker offsets. Markers the recording never shows keep their offsets.
 /// Joint limits are not touched, and the adjusted poses stay inside them.
 SubjectCalibration calibrate_subject(const body::BodyModel& model, const body::MarkerMapping& mapping,
-                                     const track::TrackerOptions& tracker_options, const MarkerSequence& recording,
-                                     const SampleSet& samples, const CalibrationOptions& options = {});
+                                     const track::TrackerOptions& tracker_options,
+                                     const MarkerSequence& recording, const SampleSet& samples,
+                                     const CalibrationOptions& options = {});
 
 /// The calibration's bundle adjustment alone, started at given poses instead of a tracking pass's:
 /// adjusts `model` (its bone-length factors and marker offsets, with the priors of `options`)

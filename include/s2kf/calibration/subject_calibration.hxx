@@ -1,14 +1,14 @@
 /// @file
-/// The definitions of <s2kf/calibration/subject_calibration.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/calibration/subject_calibration.hpp>: inline where the library is used
+/// header-only, compiled once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
-#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/calibration/bundle_adjustment.hxx>
-
+#include <s2kf/calibration/subject_calibration.hpp>
 
 namespace s2kf::calibration {
-S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, const body::MarkerMapping& mapping,
+S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
+                                                 const body::MarkerMapping& mapping,
                                                  const track::TrackerOptions& tracker_options,
                                                  const MarkerSequence& recording, const SampleSet& samples,
                                                  const CalibrationOptions& options) {
@@ -30,6 +30,7 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
   const double noise_variance = tracker_options.marker_noise_mm * tracker_options.marker_noise_mm;
   detail::BundleAdjustment adjustment(start, mapping, recording, options, noise_variance);
   const std::vector<int>& used = adjustment.used();
+  Eigen::VectorXd reference;  // the static trial's reference pose
 
   for (int round = 0; round <= options.iterations; ++round) {
     const bool last = round == options.iterations;
@@ -42,6 +43,8 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
       break;
     }
     if (frames.empty()) throw std::invalid_argument("calibration: no frame could be tracked");
+    if (round == 0 && options.static_pose_sd_rad > 0)
+      reference = detail::choose_static_pose(options, frames, model.joint_count(), result.static_pose_choice);
 
     // Inliers: observed residuals at the tracked poses within max(floor, 4 x median).
     std::vector<std::vector<double>> distances(frames.size());
@@ -71,7 +74,7 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
         else
           frames[k].markers.push_back(static_cast<int>(u));
       }
-      if (options.static_pose_sd_rad > 0) frames[k].prior_joints = Eigen::VectorXd::Zero(model.joint_count());
+      if (options.static_pose_sd_rad > 0) frames[k].prior_joints = reference;
       // A frame's pose is determined only with 3 or more markers.
       if (frames[k].markers.size() >= 3) kept.push_back(std::move(frames[k]));
     }
@@ -80,6 +83,7 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, c
     adjustment.adjust(result.model, kept, pass);
     result.passes.push_back(pass);
     result.marker_residual_rms_mm = detail::marker_residual_rms(result.model, mapping, recording, used, kept);
+    if (options.static_pose_sd_rad > 0) result.static_posture = detail::mean_joints(kept);
   }
   result.segment_scale = adjustment.segment_scale();
   result.mean_marker_distance_before_mm = result.passes.front().mean_marker_distance_mm;
@@ -100,8 +104,9 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
   detail::BundleAdjustment adjustment(model, mapping, recording, options,
                                       tracker_options.marker_noise_mm * tracker_options.marker_noise_mm);
   const std::vector<int>& used = adjustment.used();
-  std::vector<detail::BundleFrame> frames = detail::frames_at_poses(
-      mapping, recording, used, poses, model.joint_count(), options.static_pose_sd_rad > 0);
+  std::vector<detail::BundleFrame> frames =
+      detail::frames_at_poses(mapping, recording, used, poses, model.joint_count(),
+                              options.static_pose_sd_rad > 0, options.static_pose);
   if (frames.empty()) throw std::invalid_argument("calibration: no posed frame shows 3 or more markers");
   SubjectCalibration result;
   result.model = model;
@@ -110,6 +115,7 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
   adjustment.adjust(result.model, frames, pass);
   result.passes.push_back(pass);
   result.marker_residual_rms_mm = detail::marker_residual_rms(result.model, mapping, recording, used, frames);
+  if (options.static_pose_sd_rad > 0) result.static_posture = detail::mean_joints(frames);
   result.segment_scale = adjustment.segment_scale();
   result.mean_marker_distance_before_mm = std::numeric_limits<double>::quiet_NaN();
   return result;

@@ -1,0 +1,61 @@
+/// @file
+/// The check every calibrated subject passes before it is used or written: bone-length factors
+/// within the model's limits, marker offsets within a plausible distance of the marker set's
+/// placement, residuals a body model can explain. A subject that fails is refused with one
+/// sentence naming the segment or marker and the likely cause.
+#pragma once
+
+#include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_set.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
+#include <s2kf/core/compilation_mode.hpp>
+
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace s2kf::calibration {
+
+/// What a calibrated subject may be and still be a person wearing the marker set.
+struct CalibrationLimits {
+  /// A bone-length factor (against the height-scaled model) outside this open range is refused:
+  /// the limits a marker-set file's segment_scale must keep (body/marker_set.hpp).
+  double min_scale = 0.5, max_scale = 2.0;
+  /// A marker farther than this (mm) from the marker set's placement on its segment was not
+  /// placed there: mislabelled, or the subject stood otherwise than assumed.
+  double max_offset_shift_mm = 80;
+  /// A marker whose RMS residual in the bundle adjustment stays above this (mm) does not fit the
+  /// body at all (outliers beyond 30 mm are already left out, so this is far beyond the noise).
+  double max_marker_residual_mm = 25;
+  /// The adjusted poses' RMS marker distance (mm) above which the fit explains nothing.
+  double max_rms_mm = 20;
+};
+
+/// What the check measured: the worst of each kind, to report beside the verdict.
+struct CalibrationCheck {
+  std::string worst_scale_segment;
+  double worst_scale = 1;  ///< the factor farthest from 1 (in ratio)
+  std::string worst_offset_marker;
+  double worst_offset_shift_mm = 0;
+  std::string worst_residual_marker;
+  double worst_residual_mm = 0;
+  double rms_mm = 0;  ///< the last bundle adjustment's RMS after it
+  /// Empty when the subject is plausible; else one sentence naming the segment or marker and the
+  /// likely cause.
+  std::string problem;
+};
+
+/// Checks `calibration` (calibrated from `start`, the model the calibration began with: the marker
+/// set applied and scaled to the height). `static_trial`: the calibration read a static trial, so a
+/// wrong stance is a likely cause.
+CalibrationCheck check_calibration(const body::BodyModel& start, const SubjectCalibration& calibration,
+                                   bool static_trial, const CalibrationLimits& limits = {});
+
+}  // namespace s2kf::calibration
+
+#if !defined(S2KF_COMPILED)
+#include <s2kf/calibration/calibration_check.hxx>
+#endif

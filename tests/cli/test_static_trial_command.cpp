@@ -1,0 +1,106 @@
+// Static trials as labs record them: the pose held is found from the data or named (--static-pose
+// zero|t-pose|a-pose|FILE), and a subject no person could be (a static trial calibrated in a pose
+// the subject did not hold) is refused with a sentence naming the segment or marker, exit 1, and
+// no subject file.
+
+#include "address_sanitizer.hpp"
+#include "cli_runner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace {
+
+using namespace s2kf;
+namespace fs = std::filesystem;
+
+/// A static trial in the T-pose (the bundled static motion, its sway included, with the upper arms
+/// 90 degrees out), simulated once into `dir`.
+std::string t_pose_trial(const fs::path& dir) {
+  fs::create_directories(dir);
+  const std::string recording = (dir / "t_pose.c3d").string();
+  if (fs::exists(recording)) return recording;
+  std::ifstream bundled(std::string(S2KF_SOURCE_DIR) + "/data/motions/static.json");
+  nlohmann::json motion = nlohmann::json::parse(bundled);
+  motion["name"] = "t_pose";
+  for (nlohmann::json& key : motion["keyframes"]) {
+    key["joints"]["LSy"] = 90;
+    key["joints"]["RSy"] = -90;
+  }
+  const std::string motion_file = (dir / "t_pose.json").string();
+  std::ofstream(motion_file) << motion.dump(1);
+  const auto [status, output] =
+      test_support::run_command("simulate --motion " + motion_file + " --seed 5 --out " + recording);
+  EXPECT_EQ(status, 0) << output;
+  return recording;
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+TEST(StaticTrialCommand, ThePoseHeldIsFoundFromTheData) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose";
+  const std::string trial = t_pose_trial(dir);
+  const auto [status, output] =
+      test_support::run_command("calibrate " + trial + " --static --out " + (dir / "found.json").string());
+  ASSERT_EQ(status, 0) << output;
+  const nlohmann::json report = read_json(dir / "found_report.json");
+  const std::string pose = report["static_pose"].get<std::string>();
+  EXPECT_EQ(pose.rfind("t-pose (found from the data)", 0), 0u) << pose;
+  EXPECT_NE(output.find("t-pose (found from the data)"), std::string::npos) << output;
+  // Named, the same pose; and the pose file the simulator wrote (its truth, first row) as well.
+  for (const std::string& named : {std::string("t-pose"), (dir / "t_pose_truth.csv").string()}) {
+    const std::string subject = (dir / "named.json").string();
+    const auto [named_status, named_output] = test_support::run_command(
+        "calibrate " + trial + " --static --static-pose " + named + " --quiet --out " + subject);
+    ASSERT_EQ(named_status, 0) << named_output;
+    EXPECT_EQ(read_json(dir / "named_report.json")["static_pose"].get<std::string>().rfind(named, 0), 0u);
+  }
+}
+
+// The subject stood in the T-pose; calibrated as if every frame were the zero pose, the arms'
+// markers would have to sit half a metre from where the marker set puts them.
+TEST(StaticTrialCommand, AWrongStanceIsRefusedAndWritesNoSubject) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose";
+  const std::string trial = t_pose_trial(dir);
+  const fs::path subject = dir / "wrong.json";
+  const auto [status, output] = test_support::run_command(
+      "calibrate " + trial + " --static --static-pose zero --static-posture exact --out " + subject.string());
+  EXPECT_EQ(status, 1) << output;
+  EXPECT_NE(output.find("is not a person's"), std::string::npos) << output;
+  EXPECT_NE(output.find("--static-pose"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(subject));
+  EXPECT_FALSE(fs::exists(dir / "wrong_report.json"));
+  // The same through s2kf track --static: nothing of the recording's is written.
+  const auto [tracked, tracked_output] = test_support::run_command(
+      "track " + trial + " --static " + trial + " --static-pose zero --static-posture exact --out " +
+      (dir / "tracked").string());
+  EXPECT_EQ(tracked, 1) << tracked_output;
+  EXPECT_NE(tracked_output.find("is not a person's"), std::string::npos) << tracked_output;
+  EXPECT_FALSE(fs::exists(dir / "tracked_subject.json"));
+  EXPECT_FALSE(fs::exists(dir / "tracked.csv"));
+}
+
+TEST(StaticTrialCommand, AnUnknownPoseIsRefusedByName) {
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose_unknown";
+  fs::create_directories(dir);
+  const std::string recording = std::string(S2KF_DATA_DIR) + "/walk.c3d";
+  const auto [status, output] = test_support::run_command(
+      "calibrate " + recording + " --static --static-pose y-pose --out " + (dir / "s.json").string());
+  EXPECT_EQ(status, 1) << output;
+  EXPECT_NE(output.find("'y-pose' is neither zero, t-pose, a-pose nor an existing pose CSV"),
+            std::string::npos)
+      << output;
+  EXPECT_FALSE(fs::exists(dir / "s.json"));
+}
+
+}  // namespace
