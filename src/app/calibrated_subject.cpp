@@ -115,10 +115,11 @@ Eigen::VectorXd static_reference_pose(const body::BodyModel& model, const std::s
 
 std::string static_posture_text(const CalibratedSubject& calibrated, const SubjectSettings& settings) {
   const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
-  std::string pose = settings.static_pose_name;
-  if (pose.empty() && calibration.static_pose_choice >= 0)
-    pose = body::reference_pose_names()[static_cast<std::size_t>(calibration.static_pose_choice)] +
-           " (found from the data)";
+  std::string pose = settings.static_pose_name == "zero" ? "zero pose" : settings.static_pose_name;
+  if (pose.empty() && calibration.static_pose_choice >= 0) {
+    pose = body::reference_pose_names()[static_cast<std::size_t>(calibration.static_pose_choice)];
+    pose = (pose == "zero" ? "zero pose" : pose) + " (found from the data)";
+  }
   if (calibration.static_posture.size() == 0) return pose;
   const Eigen::VectorXd reference =
       calibration.static_pose_choice >= 0
@@ -134,7 +135,8 @@ std::string static_posture_text(const CalibratedSubject& calibrated, const Subje
   return pose + ", posture held " +
          fixed_text(std::sqrt(off.squaredNorm() / static_cast<double>(off.size())), 1) +
          " deg RMS from it (most " + calibration.model.joints[static_cast<std::size_t>(worst)].name + ", " +
-         fixed_text(off(worst), 1) + " deg)";
+         fixed_text(off(worst), 1) + " deg" +
+         (std::abs(off(worst)) > 25 ? "; far from it: was that the pose held?" : "") + ")";
 }
 
 void write_subject_file(const std::string& path, const nlohmann::json& document) {
