@@ -69,28 +69,28 @@ TEST(CalibrationCheck, AMarkerFarFromItsPlaceIsNamedAsMislabelled) {
   Calibrated c = plausible();
   const int m = c.start.marker_index("RKNE") >= 0 ? c.start.marker_index("RKNE") : 7;
   const std::string name = c.start.markers[static_cast<std::size_t>(m)].name;
-  c.calibration.model.markers[static_cast<std::size_t>(m)].offset += Eigen::Vector3d(0, 150, 0);
+  c.calibration.model.markers[static_cast<std::size_t>(m)].offset += Eigen::Vector3d(0, 250, 0);
   const std::string problem = calibration::check_calibration(c.start, c.calibration, false).problem;
   EXPECT_TRUE(mentions(problem, "marker " + name)) << problem;
   EXPECT_TRUE(mentions(problem, "mislabelled")) << problem;
   EXPECT_TRUE(mentions(problem, "segment " + body::segment_of_frame(c.start, c.start.markers[m].frame)))
       << problem;
-  // 79 mm is still a placement.
+  // 199 mm is still a placement.
   c.calibration.model.markers[static_cast<std::size_t>(m)].offset =
-      c.start.markers[static_cast<std::size_t>(m)].offset + Eigen::Vector3d(0, 79, 0);
+      c.start.markers[static_cast<std::size_t>(m)].offset + Eigen::Vector3d(0, 199, 0);
   EXPECT_TRUE(calibration::check_calibration(c.start, c.calibration, false).problem.empty());
 }
 
 TEST(CalibrationCheck, ManyMarkersFarOffPointAtTheMarkerSet) {
   Calibrated c = plausible();
-  for (body::Marker& marker : c.calibration.model.markers) marker.offset += Eigen::Vector3d(100, 0, 0);
+  for (body::Marker& marker : c.calibration.model.markers) marker.offset += Eigen::Vector3d(210, 0, 0);
   const std::string problem = calibration::check_calibration(c.start, c.calibration, false).problem;
   EXPECT_TRUE(mentions(problem, "marker set that is not the recording's")) << problem;
 }
 
 TEST(CalibrationCheck, AMarkerOrAFitTheBodyCannotExplainIsRefused) {
   Calibrated c = plausible();
-  c.calibration.marker_residual_rms_mm[3] = 40;
+  c.calibration.marker_residual_rms_mm[3] = 45;
   const std::string marker = calibration::check_calibration(c.start, c.calibration, false).problem;
   EXPECT_TRUE(mentions(marker, "marker " + c.start.markers[3].name)) << marker;
   c = plausible();

@@ -90,6 +90,28 @@ TEST(StaticTrialCommand, AWrongStanceIsRefusedAndWritesNoSubject) {
   EXPECT_FALSE(fs::exists(dir / "tracked.csv"));
 }
 
+// A recording that is all standing still in the T-pose: s2kf track takes it as its own static trial
+// and says so; --no-static-stretch does not.
+TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose";
+  const std::string trial = t_pose_trial(dir);
+  const auto messages = [&](const std::string& name, const std::string& options) {
+    const auto [status, output] = test_support::run_command("track " + trial + " --formats csv --quiet " +
+                                                            options + " --out " + (dir / name).string());
+    EXPECT_EQ(status, 0) << output;
+    std::string all;
+    for (const auto& message : read_json(dir / (name + ".json"))["marker_set_messages"])
+      all += message.get<std::string>() + "\n";
+    return all;
+  };
+  const std::string found = messages("stretch", "");
+  EXPECT_NE(found.find("frames 0-299 (3.0 s) are a static trial in the t-pose (found from the data)"),
+            std::string::npos)
+      << found;
+  EXPECT_EQ(messages("no_stretch", "--no-static-stretch").find("static trial"), std::string::npos);
+}
+
 TEST(StaticTrialCommand, AnUnknownPoseIsRefusedByName) {
   const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose_unknown";
   fs::create_directories(dir);

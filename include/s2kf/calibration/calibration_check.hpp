@@ -25,13 +25,15 @@ struct CalibrationLimits {
   /// the limits a marker-set file's segment_scale must keep (body/marker_set.hpp).
   double min_scale = 0.5, max_scale = 2.0;
   /// A marker farther than this (mm) from the marker set's placement on its segment was not
-  /// placed there: mislabelled, or the subject stood otherwise than assumed.
-  double max_offset_shift_mm = 80;
+  /// placed there: mislabelled, or the subject stood otherwise than assumed. Real placements differ
+  /// from a set's by more than 10 cm (test1's RELB: 123 mm, calibrated to 3.4 mm), a left-right swap
+  /// by 20 cm or more.
+  double max_offset_shift_mm = 200;
   /// A marker whose RMS residual in the bundle adjustment stays above this (mm) does not fit the
   /// body at all (outliers beyond 30 mm are already left out, so this is far beyond the noise).
-  double max_marker_residual_mm = 25;
+  double max_marker_residual_mm = 40;
   /// The adjusted poses' RMS marker distance (mm) above which the fit explains nothing.
-  double max_rms_mm = 20;
+  double max_rms_mm = 25;
 };
 
 /// What the check measured: the worst of each kind, to report beside the verdict.
