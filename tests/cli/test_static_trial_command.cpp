@@ -100,9 +100,9 @@ TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
     const auto [status, output] = test_support::run_command("track " + trial + " --formats csv --quiet " +
                                                             options + " --out " + (dir / name).string());
     EXPECT_EQ(status, 0) << output;
+    const nlohmann::json summary = read_json(dir / (name + ".json"));
     std::string all;
-    for (const auto& message : read_json(dir / (name + ".json"))["marker_set_messages"])
-      all += message.get<std::string>() + "\n";
+    for (const auto& message : summary["marker_set_messages"]) all += message.get<std::string>() + "\n";
     return all;
   };
   const std::string found = messages("stretch", "");
