@@ -86,7 +86,8 @@ S2KF_INLINE CalibrationCheck check_calibration(const body::BodyModel& start,
                     detail::number_text(check.rms_mm, 1) + " mm after adjusting it (at most " +
                     detail::number_text(limits.max_rms_mm, 0) + " mm expected); likely cause: " + stance +
                     "a marker set that is not the recording's";
-  } else if (check.worst_residual_mm > limits.max_marker_residual_mm) {
+  } else if (check.worst_residual_mm > limits.max_marker_residual_mm &&
+             check.worst_residual_mm > limits.marker_residual_ratio * check.rms_mm) {
     check.problem = "the calibrated subject does not fit marker " + check.worst_residual_marker +
                     " on segment " + segment_of(check.worst_residual_marker) + ": an RMS distance of " +
                     detail::number_text(check.worst_residual_mm, 1) + " mm after adjusting it (at most " +
