@@ -116,6 +116,7 @@ for seed in args.seeds.split(","):
                        "most_rejected_share": max([(r["innovation"] + r["frozen"]) / summary["frames"]
                                                    for r in summary["rejected_markers"]] or [0])}
                 row.update({k: summary["truth"][k] for k in KEYS})
+                row["segment_rms_deg"] = summary["truth"]["segment_rms_deg"]
                 rows.append(row)
 
 if args.raw:

@@ -189,7 +189,8 @@ void run_live(LiveSettings settings) {
     track.request.calibration_frames = static_cast<long>(first.frame_count());
   }
   track.request.calibration_threads = every_core();  // one stream: its calibration may take every core
-  track.request.static_stretch = false;  // the first seconds are calibrated as they are: no wait for a still stretch
+  // The first seconds are calibrated as they are: tracking does not wait for a still stretch.
+  track.request.static_stretch = false;
 
   // The row's values are the pose columns after frame and time.
   std::vector<std::string> columns = body::pose_column_names(body::mmm_body_model(1000).joint_names());

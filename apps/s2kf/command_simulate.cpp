@@ -1,8 +1,8 @@
 // `s2kf simulate`: a synthetic recording with ground truth (C3D + _truth.csv + _clean.csv).
 #include <s2kf/app/bundled_motions.hpp>
-#include "command.hpp"
 #include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/motion_json.hpp>
+#include "command.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>

@@ -164,8 +164,7 @@ const RegisterCommand track_registration{
       app.add_flag("--static-refine", settings->request.static_refine,
                    "with --static: calibrate again on each recording, starting from the static trial's "
                    "subject (the motion corrects the joint centres; the directions it cannot see stay "
-                   "the static trial's)")
-          ->needs("--static");
+                   "the static trial's)");  // without --static: app::check_request's sentence
       app.add_flag("!--no-static-stretch", settings->request.static_stretch,
                    "without --static: do not take a stretch of the recording in which the subject stands "
                    "still (1 s or more) in a reference pose as its static trial (default: it is, and "

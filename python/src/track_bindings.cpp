@@ -336,11 +336,10 @@ void bind_track(py::module_& module) {
          const py::object& markerset, const py::object& subject, const py::object& static_trial,
          double static_sd, const py::object& static_pose, const std::string& static_posture,
          bool static_refine, bool static_stretch, bool calibrate, std::int64_t calibration_frames,
-         int calibration_samples,
-         double calibration_shrink, bool uniform_noise, bool smooth, int samples, double height,
-         const py::object& height_mm, const std::string& preset, const std::string& motion_model,
-         const std::string& gain, const std::string& method, const py::object& truth,
-         const py::object& model_output, const py::object& name) {
+         int calibration_samples, double calibration_shrink, bool uniform_noise, bool smooth, int samples,
+         double height, const py::object& height_mm, const std::string& preset,
+         const std::string& motion_model, const std::string& gain, const std::string& method,
+         const py::object& truth, const py::object& model_output, const py::object& name) {
         const auto text = [](const py::object& value) {
           return value.is_none() ? std::string() : py::str(value).cast<std::string>();
         };
@@ -423,7 +422,8 @@ void bind_track(py::module_& module) {
           throw py::value_error("static_posture must be 'near' or 'exact', not '" + static_posture + "'");
         settings.static_pose = static_trial;
         settings.static_sd_deg = static_sd;
-        settings.static_pose_name = static_pose.is_none() ? std::string() : py::str(static_pose).cast<std::string>();
+        settings.static_pose_name =
+            static_pose.is_none() ? std::string() : py::str(static_pose).cast<std::string>();
         settings.static_pose_option = "static_pose";
         settings.static_posture = static_posture;
         settings.threads = app::every_core();
@@ -431,8 +431,8 @@ void bind_track(py::module_& module) {
       },
       py::arg("recording"), py::kw_only(), py::arg("out") = py::none(), py::arg("static") = false,
       py::arg("static_sd") = 3.0, py::arg("static_pose") = py::none(), py::arg("static_posture") = "near",
-      py::arg("markerset") = py::none(), py::arg("height_mm") = 0.0,
-      py::arg("frames") = 1200, py::arg("uniform_noise") = false,
+      py::arg("markerset") = py::none(), py::arg("height_mm") = 0.0, py::arg("frames") = 1200,
+      py::arg("uniform_noise") = false,
       "Estimates a subject's marker offsets and bone lengths from a C3D recording as `s2kf calibrate` does "
       "and returns the subject file's document (a dict); out: also write it there (for track(subject=...) "
       "or `s2kf track --subject`). static: the recording is a static trial (static_pose, static_sd, "

@@ -186,6 +186,31 @@ def test_a_static_trial_calibrates_the_subject_first(cli, tmp_path):
         s2kf.track(str(walk), static=str(static), static_sd=0)
 
 
+def test_the_static_keywords_are_the_programs(cli, tmp_path):
+    """static_refine, static_stretch, static_pose and static_posture do what the program's options do."""
+    static, walk = tmp_path / "static.c3d", tmp_path / "walk.c3d"
+    cli("simulate", "--motion", "static", "--seed", "5", "--out", static)
+    cli("simulate", "--motion", "walk", "--seed", "5", "--frames", "150", "--out", walk)
+    # Calibrated again on the walk from the static trial's subject, as `s2kf track --static-refine`.
+    refined = s2kf.track(str(walk), static=str(static), static_refine=True)
+    cli("track", walk, "--static", static, "--static-refine", "--quiet", "--formats", "csv",
+        "--out", tmp_path / "cli")
+    program = np.genfromtxt(tmp_path / "cli.csv", delimiter=",", skip_header=1)
+    np.testing.assert_allclose(refined.poses, program[:, 2:], rtol=0, atol=1e-9)
+    assert refined.summary["calibration"] is not None
+    # The still recording is its own static trial unless static_stretch=False.
+    still = s2kf.track(str(static), static_pose="zero")
+    assert any("are a static trial in the zero pose" in m for m in still.summary["marker_set_messages"])
+    plain = s2kf.track(str(static), static_stretch=False)
+    assert not any("static trial" in m for m in plain.summary["marker_set_messages"])
+    with pytest.raises(ValueError, match="static_refine calibrates again .* it needs static"):
+        s2kf.track(str(walk), static_refine=True)
+    with pytest.raises(ValueError, match="static_posture must be 'near' or 'exact'"):
+        s2kf.track(str(walk), static=str(static), static_posture="close")
+    with pytest.raises(ValueError, match="static_pose: 'y-pose' is neither zero, t-pose, a-pose"):
+        s2kf.calibrate(static, static=True, static_pose="y-pose")
+
+
 def test_calibrate_writes_the_subject_file_the_program_writes(cli, tmp_path):
     """s2kf.calibrate is `s2kf calibrate`: the same subject file (but for its name), also returned."""
     static = tmp_path / "static.c3d"

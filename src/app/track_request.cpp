@@ -263,8 +263,8 @@ nlohmann::json summarize_track(const PreparedTrack& prepared, const track::Track
 
 SubjectSettings static_trial_settings(const TrackRequest& request) {
   SubjectSettings settings =
-      static_trial_settings(request.markerset, request.height_mm, !request.uniform_noise, request.static_sd_deg,
-                            request.static_pose, request.static_posture);
+      static_trial_settings(request.markerset, request.height_mm, !request.uniform_noise,
+                            request.static_sd_deg, request.static_pose, request.static_posture);
   settings.static_pose_option = option_name(request, "static-pose");
   return settings;
 }

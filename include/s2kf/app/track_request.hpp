@@ -35,7 +35,7 @@ struct TrackRequest {
   // The marker set: at most one of markerset, subject, static_trial.
   std::string markerset;       ///< a bundled set's name or a .json file; empty: the best bundled match
   std::string subject;         ///< a calibrated subject file (`s2kf calibrate`)
-  std::string static_trial;  ///< a C3D static trial: the subject is calibrated on it first
+  std::string static_trial;    ///< a C3D static trial: the subject is calibrated on it first
   double static_sd_deg = 3.0;  ///< how far (SD, degrees) each joint may be from the reference pose there
   /// The pose held in the static trial (or a static stretch): zero, t-pose, a-pose or a pose CSV
   /// (its first row); empty: the reference pose nearest the tracked posture.
