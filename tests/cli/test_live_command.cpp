@@ -67,7 +67,8 @@ TEST(LiveCommand, SameJointAnglesAsTrackOnTheServedFile) {
   const nlohmann::json summary = summary_of(live);
   ASSERT_EQ(summary["live"]["frames_dropped_busy"], 0);
   ASSERT_EQ(summary["live"]["frames_missing"], 0);
-  EXPECT_EQ(summary["live"]["frames_received"].get<long>(), 300);
+  // The receiving thread may read a frame or two more before the stream is ended after the 300th.
+  EXPECT_GE(summary["live"]["frames_received"].get<long>(), 300);
   EXPECT_EQ(summary["live"]["latency_ms"]["frames"], 200);  // the frames after the first second
   const auto expected = csv_rows(read_text(tracked + ".csv"));
   const auto got = csv_rows(read_text(live + ".csv"));
