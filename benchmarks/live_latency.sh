@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Latency of `s2kf live` over loopback: `s2kf serve` streams a simulated walk (50 markers, as long
 # as the run, so the stream never jumps back to its start as a looped recording does) at 100, 300
-# and 1000 Hz and `s2kf live` tracks it with a subject calibrated on it, sending every pose out as a JSON line
-# over UDP; each run's summary gives the time from a frame's arrival to its pose going out (median,
-# p99, max), the frames over the deadline (one frame period), the frames dropped while busy (and of
-# them, before the first pose), the tracker's own median time per frame and the most memory the
-# program held.
+# and 1000 Hz and `s2kf live` tracks it with a subject calibrated on it, sending every pose out as a
+# JSON line over UDP. Each run's summary gives the time from a frame's arrival to its pose going out
+# once the tracker has caught up with the held first second (median, p99, max, frames over one frame
+# period), the frames dropped while busy (and of them, before the first pose), the frames tracked
+# while catching up and the latest of them, the tracker's own median time per frame and the most
+# memory the program held. SECONDS_PER_RATE is a whole number.
 #   benchmarks/live_latency.sh [BUILD_DIR] [SECONDS_PER_RATE] [RATES...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,7 +18,7 @@ rates=("$@")
 s2kf=$build/s2kf
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-printf '%-6s %8s %10s %9s %9s %8s %9s %9s %10s %9s\n' rate frames median_ms p99_ms max_ms misses dropped preparing step_ms rss_mb
+printf '%-6s %8s %10s %9s %9s %8s %9s %9s %9s %11s %10s %9s\n' rate frames median_ms p99_ms max_ms misses dropped preparing catch_up catch_up_ms step_ms rss_mb
 for rate in "${rates[@]}"; do
   rm -f "$work/port"
   recording=$work/walk_$rate.c3d
@@ -39,6 +40,7 @@ live = summary["live"]
 latency = live["latency_ms"]
 print(f'{sys.argv[2]:<6} {latency["frames"]:>8} {latency["median"]:>10.3f} {latency["p99"]:>9.3f} '
       f'{latency["max"]:>9.3f} {latency["deadline_misses"]:>8} {live["frames_dropped_busy"]:>9} '
-      f'{live["frames_dropped_preparing"]:>9} {summary["latency_ms"]["median"]:>10.3f} {int(sys.argv[3]) / 1024:>9.1f}')
+      f'{live["frames_dropped_preparing"]:>9} {live["catch_up"]["frames"]:>9} {live["catch_up"]["max_ms"]:>11.1f} '
+      f'{summary["latency_ms"]["median"]:>10.3f} {int(sys.argv[3]) / 1024:>9.1f}')
 PY
 done

@@ -246,8 +246,10 @@ TEST(LiveFeed, FramesArrivingWhileTheHeldStretchIsTrackedAreKept) {
   LiveFeed feed("127.0.0.1", server.port(), quiet_feed(10));
   LiveFrameSource source(feed, {});
   ASSERT_EQ(source.hold_first(60).frame_count(), 60);
+  EXPECT_TRUE(feed.catching_up());
   std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the whole recording has been sent
   const std::vector<MarkerFrame> frames = read_all(source);
+  EXPECT_FALSE(feed.catching_up());
   ASSERT_EQ(frames.size(), 100u);
   for (std::size_t f = 0; f < frames.size(); ++f)
     EXPECT_EQ(frames[f].positions(1, 0), static_cast<double>(f));
@@ -262,7 +264,8 @@ TEST(LiveFeed, OnceCaughtUpOnlyTheBacklogIsKept) {
   ASSERT_EQ(source.hold_first(40).frame_count(), 40);
   MarkerFrame frame;
   for (std::int64_t f = 0; f < 60; ++f) ASSERT_TRUE(source.read(f, frame));  // live, caught up
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));               // about 120 frames arrive
+  EXPECT_FALSE(feed.catching_up());
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // about 120 frames arrive
   for (std::int64_t f = 60; source.read(f, frame); ++f) {
   }
   EXPECT_GT(feed.counts().dropped, 50);

@@ -99,6 +99,13 @@ class LiveFeed {
     limit_ = std::max(options_.backlog, frames);
   }
 
+  /// True from keep_until_caught_up until the consumer has emptied the backlog (or used up the
+  /// allowance): the frames it takes meanwhile were waiting behind the held stretch.
+  bool catching_up() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return limit_ > options_.backlog;
+  }
+
   /// Ends the stream (says "Bye" to the server) and the receiving thread.
   void stop() {
     {
