@@ -198,6 +198,8 @@ const RegisterCommand track_registration{
           "ground-truth motion CSV (s2kf simulate's _truth.csv): adds the accuracy to the summary");
       app.add_flag("--realtime", settings->realtime,
                    "pace frames at the recording's rate and count deadline misses");
+      app.add_flag("--force", settings->request.force,
+                   "track even a recording whose inferred marker set does not look like a whole body");
       app.add_flag("--html", settings->html,
                    "also write PREFIX.html: the motion in 3D in a browser (s2kf view)");
       app.add_flag("--quiet", settings->quiet, "print nothing but errors");

@@ -43,7 +43,10 @@ std::pair<body::BodyModel, body::MarkerMapping> tracked_model(const std::string&
   }
   std::string markerset, subject;
   const std::string origin = summary.value("marker_set_source", std::string());
-  if (origin.rfind(kSubjectSource, 0) == 0)
+  const nlohmann::json placed = summary.value("markers_inferred", nlohmann::json::array());
+  if (placed.is_array() && !placed.empty())  // s2kf track wrote the completed set beside its outputs
+    markerset = prefix + "_markerset.json";
+  else if (origin.rfind(kSubjectSource, 0) == 0)
     subject = origin.substr(kSubjectSource.size());
   else if (origin == "given")
     markerset = summary["marker_set"].is_string() ? summary["marker_set"].get<std::string>() : std::string();

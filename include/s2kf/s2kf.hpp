@@ -29,6 +29,7 @@
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/marker_set_labels.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/body/non_marker_points.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/body/reference_poses.hpp>
 #include <s2kf/body/pose_columns.hpp>
@@ -88,6 +89,8 @@
 
 #include <s2kf/pipeline/session.hpp>
 
+#include <s2kf/markerset/body_coverage.hpp>
+#include <s2kf/markerset/marker_set_completion.hpp>
 #include <s2kf/markerset/marker_set_inference.hpp>
 #include <s2kf/markerset/rigid_clusters.hpp>
 #include <s2kf/markerset/segment_rigidity.hpp>

@@ -215,6 +215,20 @@ std::vector<std::string> marker_set_messages(const MarkerSetChoice& choice,
                      "): " + std::to_string(mapping.markers_used()) + " of its " +
                      std::to_string(choice.set.entries.size()) + " markers are in the recording");
   messages.insert(messages.end(), mapping.label_notes.begin(), mapping.label_notes.end());
+  // Labels left out, grouped by reason: model outputs and virtual points come by the dozen.
+  std::vector<std::pair<std::string, std::vector<std::string>>> by_reason;
+  for (const markerset::LeftOutPoint& point : choice.left_out) {
+    auto found = std::find_if(by_reason.begin(), by_reason.end(),
+                              [&](const auto& group) { return group.first == point.reason; });
+    if (found == by_reason.end()) found = by_reason.insert(by_reason.end(), {point.reason, {}});
+    found->second.push_back(point.label);
+  }
+  for (const auto& [reason, labels] : by_reason) {
+    std::string list;
+    for (std::size_t k = 0; k < labels.size(); ++k)
+      list += k < 8 ? (k == 0 ? "" : ", ") + labels[k] : k == 8 ? ", ..." : "";
+    messages.push_back("left out " + std::to_string(labels.size()) + " label(s), " + reason + ": " + list);
+  }
   std::vector<std::string> ignored;
   for (const std::string& label : mapping.ignored_labels)
     if (!label.empty()) ignored.push_back(label);

@@ -174,7 +174,7 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
     prepared.choice.source = "calibrated on the static trial " + request.static_trial;
   } else if (!recording.inferred_markerset_path.empty()) {
     prepared.choice = choose_or_infer_marker_set(input, source.labels(), request.markerset, request.subject,
-                                                 recording.inferred_markerset_path);
+                                                 recording.inferred_markerset_path, request.force);
   } else {
     prepared.choice = choose_marker_set_for(source.labels(), request.markerset, request.subject);
   }

@@ -30,6 +30,16 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
   const double level = converged >= 0 ? track::mean_from(run.mean_marker_distance, converged)
                                       : std::numeric_limits<double>::quiet_NaN();
   const double overall = track::mean_from(run.mean_marker_distance, 0);
+  // The markers the set did not name, placed by their motion, and the labels left out.
+  nlohmann::json inferred = nlohmann::json::array(), left_out = nlohmann::json::array();
+  for (const markerset::CompletedMarker& m : choice.inferred)
+    inferred.push_back({{"label", m.label},
+                        {"segment", m.segment},
+                        {"frame", m.frame},
+                        {"spread_mm", m.spread_mm},
+                        {"confidence", m.confidence}});
+  for (const markerset::LeftOutPoint& p : choice.left_out)
+    left_out.push_back({{"label", p.label}, {"reason", p.reason}});
   nlohmann::json calibration = nullptr;
   if (session.calibration)
     calibration = {
@@ -93,6 +103,8 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
       {"marker_set", choice.set.name},
       {"marker_set_source", choice.source},
       {"marker_set_messages", messages},
+      {"markers_inferred", inferred},
+      {"labels_left_out", left_out},
       {"calibration", calibration},
       {"smoothed", smoothed},
       {"preset", session.tracker.preset},

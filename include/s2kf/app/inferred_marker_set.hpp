@@ -10,8 +10,11 @@
 #include <s2kf/app/user_error.hpp>
 
 #include <s2kf/body/marker_set_labels.hpp>
+#include <s2kf/body/non_marker_points.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/markerset/body_coverage.hpp>
+#include <s2kf/markerset/marker_set_completion.hpp>
 #include <s2kf/markerset/marker_set_inference.hpp>
 
 #include <cmath>
@@ -27,8 +30,10 @@ inline constexpr int kInferenceSamples = 101;
 /// Infers a marker set for the recording at `input` and writes it to `out` (atomically). `up_axis`:
 /// 0-2, or -1 to find it. Throws UserError with one sentence when the recording cannot be read or
 /// its markers cannot be placed unambiguously.
+/// Where `not_a_body` is given and the inferred set does not look like a whole body
+/// (markerset::whole_body_problem), the sentence goes there and nothing is written.
 inline markerset::InferredMarkerSet infer_marker_set_file(const std::string& input, const std::string& out,
-                                                          int up_axis) {
+                                                          int up_axis, std::string* not_a_body = nullptr) {
   MarkerSequence recording;
   try {
     recording = c3d::read_c3d(input);
@@ -46,6 +51,11 @@ inline markerset::InferredMarkerSet infer_marker_set_file(const std::string& inp
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": no marker set can be inferred: " + e.what());
   }
+  if (not_a_body) {
+    *not_a_body =
+        markerset::whole_body_problem(body::apply_marker_set(body::mmm_body_model(1000), inferred.set));
+    if (!not_a_body->empty()) return inferred;
+  }
   inferred.set.name = std::filesystem::path(out).stem().string();
   if (std::filesystem::path(out).has_parent_path())
     std::filesystem::create_directories(std::filesystem::path(out).parent_path());
@@ -61,31 +71,92 @@ inline bool bundled_set_fits(const std::vector<std::string>& labels, const body:
   return body::map_marker_set(labels, set).markers_used() >= track::TrackerOptions{}.min_markers_to_start;
 }
 
-/// choose_marker_set_for, and when neither option names a set and no bundled set fits the labels,
-/// a set inferred from the recording itself, written to `inferred_path`; the choice's source says so.
+/// The recording's labels that `set` does not name and that may be markers (not empty, not a
+/// model output or joint centre by name): worth reading the recording to place them.
+inline bool labels_beyond_set(const std::vector<std::string>& labels, const body::MarkerSet& set) {
+  const body::MarkerMapping mapping = body::map_marker_set(labels, set);
+  for (const std::string& label : mapping.ignored_labels)
+    if (!label.empty() && !body::non_marker_reason(label, labels)) return true;
+  return false;
+}
+
+/// `choice` completed for the recording at `input`: the labels its set does not name placed on
+/// the segments they ride on (markerset::complete_marker_set), the combined set written to
+/// `completed_path` when any was placed; the choice's source says so.
+inline void complete_choice(const std::string& input, MarkerSetChoice& choice,
+                            const std::string& completed_path) {
+  MarkerSequence recording;
+  try {
+    recording = c3d::read_c3d(input);
+  } catch (const std::exception& e) {
+    throw UserError(e.what());
+  }
+  markerset::MarkerSetInferenceOptions options;
+  options.tracker.samples = kInferenceSamples;
+  for (const std::string& name : bundled_marker_set_names())
+    options.known_sets.push_back(resolve_marker_set(name));
+  markerset::CompletedMarkerSet completed;
+  try {
+    completed = markerset::complete_marker_set(recording, choice.set,
+                                               cached_sample_set(46, kInferenceSamples), options);
+  } catch (const std::invalid_argument& e) {
+    throw UserError(input + ": " + e.what());
+  }
+  choice.inferred = completed.inferred;
+  choice.left_out = completed.left_out;
+  if (completed.inferred.empty()) return;
+  completed.set.name = choice.set.name + "+inferred";
+  if (std::filesystem::path(completed_path).has_parent_path())
+    std::filesystem::create_directories(std::filesystem::path(completed_path).parent_path());
+  io::write_file_atomically(completed_path, [&](std::ostream& stream) {
+    stream << marker_set_to_json(completed.set).dump(2) << "\n";
+  });
+  choice.set = completed.set;
+  choice.source += "; with " + std::to_string(completed.inferred.size()) +
+                   " marker(s) it does not name placed by their motion (label segment confidence:";
+  for (const markerset::CompletedMarker& m : completed.inferred)
+    choice.source +=
+        " " + m.label + " " + m.segment + " " + std::to_string(std::lround(100 * m.confidence)) + " %";
+  choice.source += "), written to " + completed_path;
+}
+
+/// choose_marker_set_for, completed with the labels the chosen set does not name (complete_choice);
+/// when neither option names a set and no bundled set fits the labels, a set inferred from the
+/// recording itself, written to `inferred_path`, refused where it does not look like a whole body
+/// unless `force`; the choice's source says what was done. A subject file is used as it is.
 inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
                                                   const std::vector<std::string>& labels,
                                                   const std::string& markerset, const std::string& subject,
-                                                  const std::string& inferred_path) {
-  if (!markerset.empty() || !subject.empty()) return choose_marker_set_for(labels, markerset, subject);
+                                                  const std::string& inferred_path, bool force = false) {
+  if (!subject.empty()) return choose_marker_set_for(labels, markerset, subject);
+  const auto completed = [&](MarkerSetChoice choice) {
+    if (labels_beyond_set(labels, choice.set)) complete_choice(input, choice, inferred_path);
+    return choice;
+  };
+  if (!markerset.empty()) return completed(choose_marker_set_for(labels, markerset, subject));
   std::vector<body::MarkerSet> sets;
   for (const std::string& name : bundled_marker_set_names()) sets.push_back(resolve_marker_set(name));
   const int best = body::choose_marker_set(labels, sets);
   if (best >= 0 && bundled_set_fits(labels, sets[static_cast<std::size_t>(best)]))
-    return choose_marker_set_for(labels, markerset, subject);
+    return completed(choose_marker_set_for(labels, markerset, subject));
   const std::string bundled_problem =
       best < 0 ? std::string("none of the recording's labels belongs to a bundled marker set")
                : "no bundled marker set names 8 of the recording's labels (best: " +
                      sets[static_cast<std::size_t>(best)].name + ")";
   markerset::InferredMarkerSet inferred;
+  std::string not_a_body;
   try {
-    inferred = infer_marker_set_file(input, inferred_path, -1);
+    inferred = infer_marker_set_file(input, inferred_path, -1, force ? nullptr : &not_a_body);
   } catch (const UserError& e) {
     // The inference's sentence ends in "give a marker set (--markerset)"; say first why it ran.
     std::string why = e.what();
     if (why.rfind(input + ": ", 0) == 0) why = why.substr(input.size() + 2);
     throw UserError(input + ": " + bundled_problem + ", and " + why);
   }
+  if (!not_a_body.empty())
+    throw UserError(
+        input + ": " + bundled_problem + ", and in the set inferred from its motion " + not_a_body +
+        "; nothing is tracked (give a marker set with --markerset, or track it anyway with --force)");
   MarkerSetChoice choice;
   choice.set = inferred.set;
   choice.source =

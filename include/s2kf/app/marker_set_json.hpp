@@ -10,6 +10,7 @@
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/calibration/subject_calibration.hpp>
+#include <s2kf/markerset/marker_set_completion.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -49,6 +50,10 @@ body::MarkerSet resolve_marker_set(const std::string& name_or_file);
 struct MarkerSetChoice {
   body::MarkerSet set;
   std::string source;  ///< "given", "subject file F" or "chosen automatically: ..."
+  /// Markers the set does not name, placed by their motion (the set above holds them), and the
+  /// labels left out with the reason.
+  std::vector<markerset::CompletedMarker> inferred;
+  std::vector<markerset::LeftOutPoint> left_out;
 };
 
 std::string format_fraction(double value);

@@ -65,6 +65,7 @@ struct TrackRequest {
   /// Memory smoothing may take (it keeps every frame's posterior) before a recording is refused.
   double smoothing_memory_limit_bytes = 8e9;
   std::string truth;  ///< a ground-truth motion CSV (s2kf simulate's _truth.csv): accuracy in the summary
+  bool force = false;  ///< track even a recording whose inferred marker set does not look like a whole body
   OptionNames names = OptionNames::program;  ///< not an option: the front end's spelling in messages
 };
 

@@ -300,16 +300,46 @@ inline FrameSpread track_and_measure(const MarkerSequence& recording, const std:
   return result;
 }
 
-}  // namespace detail
+/// What every step reads: the recording, the points being placed, the template and the vertical.
+struct InferenceContext {
+  InferenceContext(const MarkerSequence& r, const SampleSet& s, const MarkerSetInferenceOptions& o)
+      : recording(r), samples(s), options(o) {}
+  const MarkerSequence& recording;
+  const SampleSet& samples;
+  const MarkerSetInferenceOptions& options;
+  body::BodyModel base = body::mmm_body_model(1000);
+  std::vector<int> points;  ///< the recording's points being placed (labelled, ever seen)
+  std::vector<TemplatePoint> candidates;
+  std::vector<long> template_frames;  ///< candidate frames for the template fit
+  int up = 2;
+  RigidClusters clusters;
 
-S2KF_INLINE InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const SampleSet& samples,
-                                               const MarkerSetInferenceOptions& options) {
-  const body::BodyModel base = body::mmm_body_model(1000);
+  std::vector<int> shown_in(long f) const {
+    std::vector<int> shown;
+    for (int p : points)
+      if (recording.visible(p, f)) shown.push_back(p);
+    return shown;
+  }
+  Eigen::Matrix3Xd positions(long f, const std::vector<int>& shown) const {
+    Eigen::Matrix3Xd lab(3, static_cast<Eigen::Index>(shown.size()));
+    for (std::size_t i = 0; i < shown.size(); ++i)
+      lab.col(static_cast<Eigen::Index>(i)) = recording.frame(f).col(shown[i]);
+    return lab;
+  }
+  const std::string& label(int point) const { return recording.labels[static_cast<std::size_t>(point)]; }
+};
+
+/// The labelled points ever seen, `only` where given (else all); refuses a label used twice and
+/// too few points or frames.
+inline std::vector<int> inference_points(const MarkerSequence& recording,
+                                         const MarkerSetInferenceOptions& options,
+                                         const std::vector<int>* only = nullptr) {
   std::vector<int> points;
   std::map<std::string, int> seen;
   for (std::size_t p = 0; p < recording.labels.size(); ++p) {
     const std::string& label = recording.labels[p];
     if (label.empty() || !recording.visible.row(static_cast<Eigen::Index>(p)).any()) continue;
+    if (only && std::find(only->begin(), only->end(), static_cast<int>(p)) == only->end()) continue;
     if (!seen.emplace(upper_case(label), static_cast<int>(p)).second)
       throw std::invalid_argument("the label " + label +
                                   " names two points; a marker set needs one label per marker");
@@ -323,322 +353,375 @@ S2KF_INLINE InferredMarkerSet infer_marker_set(const MarkerSequence& recording, 
     throw std::invalid_argument("the recording has " + std::to_string(recording.frame_count()) +
                                 " frames; at least " + std::to_string(2 * options.skip_frames + 10) +
                                 " are needed to infer a marker set");
+  return points;
+}
 
-  InferredMarkerSet result;
-  result.clusters = find_rigid_clusters(recording, points, options.clusters);
-  if (result.clusters.clusters.size() < 2)
-    throw std::invalid_argument("all " + std::to_string(points.size()) +
+/// Step 1: the rigid clusters; a recording that is one rigid cluster is refused.
+inline void find_clusters(InferenceContext& c) {
+  c.clusters = find_rigid_clusters(c.recording, c.points, c.options.clusters);
+  if (c.clusters.clusters.size() < 2)
+    throw std::invalid_argument("all " + std::to_string(c.points.size()) +
                                 " markers keep their mutual distances (one rigid cluster): nothing moves "
                                 "against anything else, so no segment can be told from another");
+}
 
-  // Candidate template frames: up to options.template_frames, spread evenly over the frames that
-  // show the most markers (a marker the template frame does not show is placed from the motion
-  // alone, less surely).
-  std::vector<long> visible_count(static_cast<std::size_t>(recording.frame_count()), 0);
+/// Candidate template frames: up to options.template_frames, spread evenly over the frames that
+/// show the most markers (a marker the template frame does not show is placed from the motion
+/// alone, less surely); then the vertical: the axis along which their markers spread furthest (a
+/// subject is taller than wide in most frames, whatever it does in a few).
+inline void choose_template_frames(InferenceContext& c) {
+  std::vector<long> visible_count(static_cast<std::size_t>(c.recording.frame_count()), 0);
   long most = 0;
-  for (Eigen::Index f = 0; f < recording.frame_count(); ++f) {
-    for (int p : points) visible_count[static_cast<std::size_t>(f)] += recording.visible(p, f) ? 1 : 0;
+  for (Eigen::Index f = 0; f < c.recording.frame_count(); ++f) {
+    for (int p : c.points) visible_count[static_cast<std::size_t>(f)] += c.recording.visible(p, f) ? 1 : 0;
     most = std::max(most, visible_count[static_cast<std::size_t>(f)]);
   }
   std::vector<long> well_seen;
   for (std::size_t f = 0; f < visible_count.size(); ++f)
     if (visible_count[f] == most) well_seen.push_back(static_cast<long>(f));
-  const long wanted = std::max(1, options.template_frames);
-  std::vector<long> template_candidates;
+  const long wanted = std::max(1, c.options.template_frames);
+  c.template_frames.clear();
   for (long k = 0; k < std::min<long>(wanted, static_cast<long>(well_seen.size())); ++k)
-    template_candidates.push_back(
+    c.template_frames.push_back(
         well_seen[static_cast<std::size_t>(k * static_cast<long>(well_seen.size()) / wanted)]);
-  const auto shown_in = [&](long f) {
-    std::vector<int> shown;
-    for (int p : points)
-      if (recording.visible(p, f)) shown.push_back(p);
-    return shown;
-  };
-  const auto positions = [&](long f, const std::vector<int>& shown) {
-    Eigen::Matrix3Xd lab(3, static_cast<Eigen::Index>(shown.size()));
-    for (std::size_t i = 0; i < shown.size(); ++i)
-      lab.col(static_cast<Eigen::Index>(i)) = recording.frame(f).col(shown[i]);
-    return lab;
-  };
-  // The vertical: the axis along which the candidate frames' markers spread furthest (a subject
-  // is taller than wide in most frames, whatever it does in a few).
-  int up = options.up_axis;
-  if (up < 0) {
+  c.up = c.options.up_axis;
+  if (c.up < 0) {
     Eigen::Vector3d extent = Eigen::Vector3d::Zero();
-    for (long f : template_candidates) {
-      const Eigen::Matrix3Xd lab = positions(f, shown_in(f));
+    for (long f : c.template_frames) {
+      const Eigen::Matrix3Xd lab = c.positions(f, c.shown_in(f));
       extent += lab.rowwise().maxCoeff() - lab.rowwise().minCoeff();
     }
-    extent.maxCoeff(&up);
+    extent.maxCoeff(&c.up);
   }
-  if (up > 2) throw std::invalid_argument("the vertical axis must be 0 (x), 1 (y) or 2 (z)");
-  result.up_axis = up;
+  if (c.up > 2) throw std::invalid_argument("the vertical axis must be 0 (x), 1 (y) or 2 (z)");
+}
 
-  // The template fit in every candidate frame. Shortlisted: the frames whose facing direction wins
-  // clearly (beyond options.heading_margin), those where the zero pose fitted first (the subject
-  // stands there, and the standing subject defines the zero of the joint angles, as the model's
-  // zero pose does), then the clearest; each is tried through the rounds below, and the one whose
-  // markers then ride most rigidly on their segments is kept.
-  const std::vector<detail::TemplatePoint> candidates = detail::template_points(base, options.known_sets);
-  std::vector<std::pair<long, detail::TemplateFit>> clear;
-  std::string excluded_note;
+/// One candidate frame's template fit.
+struct FramedFit {
+  long frame = 0;
+  TemplateFit fit;
+};
+
+/// Step 2: the template fit in every candidate frame. Shortlisted: the frames whose facing
+/// direction wins clearly (beyond options.heading_margin), those where the zero pose fitted first
+/// (the subject stands there, and the standing subject defines the zero of the joint angles, as the
+/// model's zero pose does), then the clearest, at most options.template_attempts.
+inline std::vector<FramedFit> shortlist_template_fits(const InferenceContext& c) {
+  std::vector<FramedFit> clear;
   double best_margin = 0;
-  long best_margin_frame = template_candidates.front();
-  for (long f : template_candidates) {
-    detail::TemplateFit trial = detail::fit_template(base, candidates, positions(f, shown_in(f)), up,
-                                                     options.refine_pose_above_rms_mm);
+  long best_margin_frame = c.template_frames.front();
+  for (long f : c.template_frames) {
+    TemplateFit trial = fit_template(c.base, c.candidates, c.positions(f, c.shown_in(f)), c.up,
+                                     c.options.refine_pose_above_rms_mm);
     if (trial.margin > best_margin) best_margin = trial.margin, best_margin_frame = f;
-    if (trial.margin > options.heading_margin) clear.emplace_back(f, std::move(trial));
+    if (trial.margin > c.options.heading_margin) clear.push_back({f, std::move(trial)});
   }
   if (clear.empty()) {
     std::ostringstream s;
-    s << "the subject's facing direction is ambiguous in all " << template_candidates.size()
+    s << "the subject's facing direction is ambiguous in all " << c.template_frames.size()
       << " well-seen frames tried (the best fit of the body model, in frame " << best_margin_frame
       << ", is only " << std::lround(100 * (best_margin - 1))
       << " % better than one facing more than 60 degrees away); give a marker set (--markerset)";
     throw std::invalid_argument(s.str());
   }
-  std::stable_sort(clear.begin(), clear.end(), [](const auto& a, const auto& b) {
-    if (a.second.pose_refined != b.second.pose_refined) return b.second.pose_refined;
-    return a.second.margin > b.second.margin;
+  std::stable_sort(clear.begin(), clear.end(), [](const FramedFit& a, const FramedFit& b) {
+    if (a.fit.pose_refined != b.fit.pose_refined) return b.fit.pose_refined;
+    return a.fit.margin > b.fit.margin;
   });
-  if (!clear.front().second.pose_refined)
+  if (!clear.front().fit.pose_refined)
     clear.erase(
-        std::remove_if(clear.begin(), clear.end(), [](const auto& c) { return c.second.pose_refined; }),
+        std::remove_if(clear.begin(), clear.end(), [](const FramedFit& f) { return f.fit.pose_refined; }),
         clear.end());
-  clear.resize(
-      std::min<std::size_t>(clear.size(), static_cast<std::size_t>(std::max(1, options.template_attempts))));
+  clear.resize(std::min<std::size_t>(clear.size(),
+                                     static_cast<std::size_t>(std::max(1, c.options.template_attempts))));
+  return clear;
+}
 
-  // Points far from every template point (beyond the cost's cap) in most of the shortlisted fits
-  // are no markers on the skin: a lab's virtual points (segment origins and axes written as
-  // points), a stray. They are left out of the set.
-  {
-    std::map<int, int> far, shown_count;
-    for (const auto& [frame, fit] : clear) {
-      const std::vector<int> shown = shown_in(frame);
-      for (std::size_t c = 0; c < shown.size(); ++c) {
-        ++shown_count[shown[c]];
-        if (fit.residual_mm[c] > detail::kTemplateCap) ++far[shown[c]];
-      }
-    }
-    std::vector<int> kept_points;
-    std::vector<std::string> left_out;
-    for (int p : points)
-      if (2 * far[p] > shown_count[p])
-        left_out.push_back(recording.labels[static_cast<std::size_t>(p)]);
-      else
-        kept_points.push_back(p);
-    if (!left_out.empty()) {
-      if (kept_points.size() < 8)
-        throw std::invalid_argument(
-            "only " + std::to_string(kept_points.size()) +
-            " points lie near the body model's surface in the template fit; at least 8 "
-            "are needed to infer a marker set");
-      std::ostringstream s;
-      s << "left out " << left_out.size() << " points far (over " << std::lround(detail::kTemplateCap)
-        << " mm) from the body's surface in the template fit, no markers on the skin:";
-      for (std::size_t k = 0; k < left_out.size(); ++k)
-        s << (k < 12 ? " " + left_out[k] : k == 12 ? " ..." : "");
-      excluded_note = s.str();
-      points = kept_points;
-      for (auto& [frame, fit] : clear)
-        detail::match_template(base, candidates, positions(frame, shown_in(frame)), up, 1, fit);
+/// Points far from every template point (beyond the cost's cap) in most of the shortlisted fits
+/// are no markers on the skin: a lab's virtual points (segment origins and axes written as
+/// points), a stray. They leave c.points (but for `keep`), the fits are matched again, and the
+/// note says which; `left_out` receives them.
+inline std::string leave_out_far_points(InferenceContext& c, std::vector<FramedFit>& shortlist,
+                                        const std::vector<int>& keep,
+                                        std::vector<int>* left_out_points = nullptr) {
+  std::map<int, int> far, shown_count;
+  for (const FramedFit& framed : shortlist) {
+    const std::vector<int> shown = c.shown_in(framed.frame);
+    for (std::size_t k = 0; k < shown.size(); ++k) {
+      ++shown_count[shown[k]];
+      if (framed.fit.residual_mm[k] > kTemplateCap) ++far[shown[k]];
     }
   }
-
-  std::map<std::string, std::string> parent_segment;
-  for (const body::Joint& joint : base.joints)
-    parent_segment.emplace(joint.group, body::segment_of_frame(base, joint.parent_frame));
-  const auto neighbours = [&](int a, int b) {
-    const std::string sa = body::segment_of_frame(base, a), sb = body::segment_of_frame(base, b);
-    return sa == sb || parent_segment[sa] == sb || parent_segment[sb] == sa;
-  };
-
-  /// A set grown from one template fit: its frames, the rounds' last spreads, and what was done.
-  struct Attempt {
-    long template_frame = 0;
-    std::vector<int> frame_of;
-    body::MarkerSet set;
-    detail::FrameSpread spread;
-    double height = 0;
-    int rounds = 0;
-    double spread_rms_mm = std::numeric_limits<double>::infinity();  ///< over markers on their frames
-    std::vector<std::string> notes;
-  };
-  const auto attempt = [&](long template_frame, const detail::TemplateFit& fit) {
-    Attempt a;
-    a.template_frame = template_frame;
-    const std::vector<int> shown = shown_in(template_frame);
-    const Eigen::Matrix3Xd lab = positions(template_frame, shown);
-
-    // The initial set: every marker on the frame of its nearest template point. A marker's offset
-    // on any frame is where the fitted pose puts it: the standing subject defines the zero of
-    // the joint angles, as the model's zero pose does (offsets measured from tracked frames would
-    // carry the first rounds' errors into the set).
-    const body::FrameTransforms template_frames =
-        body::joint_frames(base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), fit.joints);
-    const Eigen::Matrix3d rotation = detail::lab_from_model(up, fit.heading);
-    std::vector<std::optional<Eigen::Vector3d>> standing(points.size());  // model coordinates, 1000 mm
-    std::vector<int>& frame_of = a.frame_of;
-    frame_of.assign(points.size(), 0);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const auto at = std::find(shown.begin(), shown.end(), points[i]);
-      if (at == shown.end()) continue;
-      const auto column = at - shown.begin();
-      frame_of[i] = candidates[static_cast<std::size_t>(fit.nearest[static_cast<std::size_t>(column)])].frame;
-      standing[i] =
-          Eigen::Vector3d(rotation.transpose() * (lab.col(column) - fit.translation) * (1000.0 / fit.height));
+  std::vector<int> kept_points;
+  std::vector<std::string> left_out;
+  for (int p : c.points)
+    if (2 * far[p] > shown_count[p] && std::find(keep.begin(), keep.end(), p) == keep.end()) {
+      left_out.push_back(c.label(p));
+      if (left_out_points) left_out_points->push_back(p);
+    } else {
+      kept_points.push_back(p);
     }
-    Eigen::Index largest = 0;
-    std::ostringstream fitted;
-    fitted << "template fit in frame " << template_frame << " (" << template_candidates.size()
-           << " well-seen frames fitted, " << clear.size() << " tried): "
-           << "xyz"[up] << " up, height " << std::lround(fit.height) << " mm, largest joint angle "
-           << std::lround(fit.joints.cwiseAbs().maxCoeff(&largest) * 180 / kPi) << " deg ("
-           << base.joints[static_cast<std::size_t>(largest)].name << "), facing "
-           << std::lround(fit.heading * 180 / kPi) << " deg (the next direction more than 60 deg away costs "
-           << std::lround(100 * (fit.margin - 1)) << " % more), RMS residual " << std::lround(fit.rms_mm())
-           << " mm";
-    a.notes.push_back(fitted.str());
-    if (!excluded_note.empty()) a.notes.push_back(excluded_note);
+  if (left_out.empty()) return {};
+  if (kept_points.size() < 8)
+    throw std::invalid_argument("only " + std::to_string(kept_points.size()) +
+                                " points lie near the body model's surface in the template fit; at least 8 "
+                                "are needed to infer a marker set");
+  std::ostringstream s;
+  s << "left out " << left_out.size() << " points far (over " << std::lround(kTemplateCap)
+    << " mm) from the body's surface in the template fit, no markers on the skin:";
+  for (std::size_t k = 0; k < left_out.size(); ++k) s << (k < 12 ? " " + left_out[k] : k == 12 ? " ..." : "");
+  c.points = kept_points;
+  for (FramedFit& framed : shortlist)
+    match_template(c.base, c.candidates, c.positions(framed.frame, c.shown_in(framed.frame)), c.up, 1,
+                   framed.fit);
+  return s.str();
+}
 
-    // The topology check (segment_rigidity.hpp): a marker whose distances to its segment's
-    // markers vary by centimetres but stay constant to another segment's moves there (the template
-    // put a thigh marker on the hand hanging beside it). Markers the template frame does not show
-    // go to the segment whose markers keep the steadiest distances to them.
-    std::vector<int> placed_points, placed_frames;
-    std::vector<std::size_t> placed_index;
-    for (std::size_t i = 0; i < points.size(); ++i)
-      if (standing[i])
-        placed_points.push_back(points[i]), placed_frames.push_back(frame_of[i]), placed_index.push_back(i);
-    for (const SegmentMove& move :
-         repair_segment_assignment(result.clusters, base, placed_points, placed_frames, options.rigidity)) {
-      std::ostringstream s;
-      s << "moved " << recording.labels[static_cast<std::size_t>(placed_points[move.marker])] << " from "
-        << move.from << " to " << move.to << ": its distances to the markers of " << move.from << " vary by "
-        << std::lround(move.from_sd_mm) << " mm (median SD), to those of " << move.to << " by "
-        << std::lround(move.to_sd_mm) << " mm";
-      a.notes.push_back(s.str());
-    }
-    for (std::size_t j = 0; j < placed_index.size(); ++j) frame_of[placed_index[j]] = placed_frames[j];
-    const auto placed_by_segment = points_by_segment(base, placed_points, placed_frames);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      if (standing[i]) continue;
-      double steadiest = std::numeric_limits<double>::infinity();
-      for (const auto& [segment, members] : placed_by_segment) {
-        const double sd = median_distance_sd(result.clusters, points[i], members);
-        if (!(sd < steadiest)) continue;
-        steadiest = sd;
-        for (std::size_t j = 0; j < placed_points.size(); ++j)
-          if (body::segment_of_frame(base, placed_frames[j]) == segment) frame_of[i] = placed_frames[j];
-      }
-    }
+/// A set grown from one template fit: its frames, the rounds' last spreads, and what was done.
+struct Attempt {
+  long template_frame = 0;
+  std::vector<int> frame_of;  ///< per point of the context, its model frame
+  body::MarkerSet set;        ///< per point of the context, its entry
+  /// Per point, where the template fit puts it (model coordinates, 1000 mm); none where the
+  /// template frame does not show it.
+  std::vector<std::optional<Eigen::Vector3d>> standing;
+  body::FrameTransforms template_pose;  ///< the model's frames at the fitted pose, 1000 mm
+  FrameSpread spread;
+  double height = 0;
+  int rounds = 0;
+  double spread_rms_mm = std::numeric_limits<double>::infinity();  ///< over markers on their frames
+  std::vector<std::string> notes;
+};
 
-    body::MarkerSet& set = a.set;
-    set.name = "inferred";
-    set.reference_height_mm = 1000.0;
-    const auto place = [&](std::size_t i, const Eigen::Vector3d& fallback) {
-      const auto k = static_cast<std::size_t>(frame_of[i]);
-      set.entries[i].frame = body::marker_set_frame_name(base, frame_of[i]);
-      set.entries[i].offset = standing[i] ? Eigen::Vector3d(template_frames.rotations[k].transpose() *
-                                                            (*standing[i] - template_frames.origins[k]))
+/// Puts point i of the attempt on its frame: where the template fit puts it, else at `fallback`
+/// (1000 mm, in the frame).
+inline void place_point(const InferenceContext& c, Attempt& a, std::size_t i,
+                        const Eigen::Vector3d& fallback) {
+  const auto k = static_cast<std::size_t>(a.frame_of[i]);
+  a.set.entries[i].frame = body::marker_set_frame_name(c.base, a.frame_of[i]);
+  a.set.entries[i].offset = a.standing[i] ? Eigen::Vector3d(a.template_pose.rotations[k].transpose() *
+                                                            (*a.standing[i] - a.template_pose.origins[k]))
                                           : fallback;
-    };
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      set.entries.emplace_back();
-      set.entries[i].label = recording.labels[static_cast<std::size_t>(points[i])];
-      place(i, Eigen::Vector3d::Zero());
-    }
+}
 
-    // Rounds of tracking and reassignment. A marker moves only to a neighbouring segment (its
-    // parent or a child): the template fit and the topology check placed it near its segment, and
-    // a distant segment can look rigid with it only where the tracking of both failed. A marker
-    // the template frame does not show takes its mean position on its frame over the tracked frames.
-    a.height = fit.height;
-    for (int round = 0; round < options.max_rounds; ++round) {
-      double estimated = a.height;
-      a.spread = detail::track_and_measure(recording, points, set, round == 0 ? a.height : 0.0, samples,
-                                           options, estimated);
-      a.height = estimated;
-      int moved = 0;
-      for (std::size_t i = 0; i < points.size(); ++i) {
-        const auto row = static_cast<Eigen::Index>(i);
-        int best_frame = frame_of[i];
-        double best_spread = std::numeric_limits<double>::infinity();
-        for (int k = 0; k < base.frame_count(); ++k)
-          if (neighbours(frame_of[i], k) && a.spread.spread(row, k) < best_spread)
-            best_frame = k, best_spread = a.spread.spread(row, k);
-        if (!std::isfinite(best_spread)) continue;
-        const double own = a.spread.spread(row, frame_of[i]);
-        if (std::isfinite(own) &&
-            (own < options.rigid_spread_mm || !(best_spread < options.move_ratio * own)))
-          best_frame = frame_of[i];
-        if (best_frame == frame_of[i]) {
-          if (!standing[i] && std::isfinite(own))
-            place(i, a.spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / a.height));
-          continue;
-        }
-        ++moved;
-        frame_of[i] = best_frame;
-        place(i, a.spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / a.height));
-      }
-      a.rounds = round + 1;
-      if (moved == 0) break;
-    }
-    double total2 = 0;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const double own = a.spread.spread(static_cast<Eigen::Index>(i), frame_of[i]);
-      const double o = std::isfinite(own) ? own : options.max_spread_mm * 10;
-      total2 += o * o;
-    }
-    a.spread_rms_mm = std::sqrt(total2 / static_cast<double>(points.size()));
-    return a;
-  };
-  Attempt kept;
-  for (const auto& [frame, fit] : clear) {
-    Attempt a = attempt(frame, fit);
-    if (a.spread_rms_mm < kept.spread_rms_mm) kept = std::move(a);
+/// Step 2 (end) and 3: the initial set from one template fit, every marker on the frame of its
+/// nearest template point, its offset where the fitted pose puts it (the standing subject defines
+/// the zero of the joint angles, as the model's zero pose does; offsets measured from tracked
+/// frames would carry the first rounds' errors into the set); then the topology check.
+inline Attempt initial_assignment(const InferenceContext& c, const FramedFit& framed, std::size_t tried,
+                                  const std::string& excluded_note) {
+  const TemplateFit& fit = framed.fit;
+  Attempt a;
+  a.template_frame = framed.frame;
+  const std::vector<int> shown = c.shown_in(framed.frame);
+  const Eigen::Matrix3Xd lab = c.positions(framed.frame, shown);
+  a.template_pose =
+      body::joint_frames(c.base, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), fit.joints);
+  const Eigen::Matrix3d rotation = lab_from_model(c.up, fit.heading);
+  a.standing.assign(c.points.size(), std::nullopt);
+  a.frame_of.assign(c.points.size(), 0);
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    const auto at = std::find(shown.begin(), shown.end(), c.points[i]);
+    if (at == shown.end()) continue;
+    const auto column = at - shown.begin();
+    a.frame_of[i] =
+        c.candidates[static_cast<std::size_t>(fit.nearest[static_cast<std::size_t>(column)])].frame;
+    a.standing[i] =
+        Eigen::Vector3d(rotation.transpose() * (lab.col(column) - fit.translation) * (1000.0 / fit.height));
   }
-  result.template_frame = kept.template_frame;
-  result.rounds = kept.rounds;
-  result.height_mm = kept.height;
-  result.notes = kept.notes;
-  const std::vector<int>& frame_of = kept.frame_of;
-  const detail::FrameSpread& spread = kept.spread;
-  body::MarkerSet& set = kept.set;
-  const std::string fitted = kept.notes.front();
+  Eigen::Index largest = 0;
+  std::ostringstream fitted;
+  fitted << "template fit in frame " << framed.frame << " (" << c.template_frames.size()
+         << " well-seen frames fitted, " << tried << " tried): "
+         << "xyz"[c.up] << " up, height " << std::lround(fit.height) << " mm, largest joint angle "
+         << std::lround(fit.joints.cwiseAbs().maxCoeff(&largest) * 180 / kPi) << " deg ("
+         << c.base.joints[static_cast<std::size_t>(largest)].name << "), facing "
+         << std::lround(fit.heading * 180 / kPi) << " deg (the next direction more than 60 deg away costs "
+         << std::lround(100 * (fit.margin - 1)) << " % more), RMS residual " << std::lround(fit.rms_mm())
+         << " mm";
+  a.notes.push_back(fitted.str());
+  if (!excluded_note.empty()) a.notes.push_back(excluded_note);
 
-  // Confidence per marker and segment: the motion's (1 - spread on its segment / spread on the best
-  // other), lowered to the topology's where that is weaker (1 - median distance SD to its
-  // segment's markers / that to the best other segment's), and halved for a marker alone on its
-  // segment, which no other marker can check.
-  const std::vector<MarkerRigidity> rigidity = marker_rigidity(result.clusters, base, points, frame_of);
-  std::map<std::string, InferredSegment> by_segment;
+  // The topology check (segment_rigidity.hpp): a marker whose distances to its segment's markers
+  // vary by centimetres but stay constant to another segment's moves there (the template put a
+  // thigh marker on the hand hanging beside it). Markers the template frame does not show go to
+  // the segment whose markers keep the steadiest distances to them.
+  std::vector<int> placed_points, placed_frames;
+  std::vector<std::size_t> placed_index;
+  for (std::size_t i = 0; i < c.points.size(); ++i)
+    if (a.standing[i])
+      placed_points.push_back(c.points[i]), placed_frames.push_back(a.frame_of[i]), placed_index.push_back(i);
+  for (const SegmentMove& move :
+       repair_segment_assignment(c.clusters, c.base, placed_points, placed_frames, c.options.rigidity)) {
+    std::ostringstream s;
+    s << "moved " << c.label(placed_points[move.marker]) << " from " << move.from << " to " << move.to
+      << ": its distances to the markers of " << move.from << " vary by " << std::lround(move.from_sd_mm)
+      << " mm (median SD), to those of " << move.to << " by " << std::lround(move.to_sd_mm) << " mm";
+    a.notes.push_back(s.str());
+  }
+  for (std::size_t j = 0; j < placed_index.size(); ++j) a.frame_of[placed_index[j]] = placed_frames[j];
+  const auto placed_by_segment = points_by_segment(c.base, placed_points, placed_frames);
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    if (a.standing[i]) continue;
+    double steadiest = std::numeric_limits<double>::infinity();
+    for (const auto& [segment, members] : placed_by_segment) {
+      const double sd = median_distance_sd(c.clusters, c.points[i], members);
+      if (!(sd < steadiest)) continue;
+      steadiest = sd;
+      for (std::size_t j = 0; j < placed_points.size(); ++j)
+        if (body::segment_of_frame(c.base, placed_frames[j]) == segment) a.frame_of[i] = placed_frames[j];
+    }
+  }
+
+  a.set.name = "inferred";
+  a.set.reference_height_mm = 1000.0;
+  a.set.entries.resize(c.points.size());
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    a.set.entries[i].label = c.label(c.points[i]);
+    place_point(c, a, i, Eigen::Vector3d::Zero());
+  }
+  a.height = fit.height;
+  return a;
+}
+
+/// Step 4: rounds of tracking and reassignment. A marker moves only to a neighbouring segment
+/// (its parent or a child): the template fit and the topology check placed it near its segment,
+/// and a distant segment can look rigid with it only where the tracking of both failed. A marker
+/// the template frame does not show takes its mean position on its frame over the tracked frames.
+/// Points marked `fixed` (a known set's) are tracked with and measured but never moved; another
+/// point on a segment that carries a fixed one takes its mean tracked position there, not the
+/// template's: the fixed markers define that segment's pose. Elsewhere (a segment only clusters
+/// ride on) the template's fitted pose stays the only reference for the zero of its joint angles.
+inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std::vector<bool>& fixed = {}) {
+  std::map<std::string, std::string> parent_segment;
+  for (const body::Joint& joint : c.base.joints)
+    parent_segment.emplace(joint.group, body::segment_of_frame(c.base, joint.parent_frame));
+  const auto neighbours = [&](int x, int y) {
+    const std::string sx = body::segment_of_frame(c.base, x), sy = body::segment_of_frame(c.base, y);
+    return sx == sy || parent_segment[sx] == sy || parent_segment[sy] == sx;
+  };
+  const MarkerSetInferenceOptions& options = c.options;
+  std::vector<std::string> anchored;  // segments that carry a fixed point
+  for (std::size_t i = 0; i < fixed.size(); ++i)
+    if (fixed[i]) anchored.push_back(body::segment_of_frame(c.base, a.frame_of[i]));
+  const auto from_motion = [&](int frame) {
+    return std::find(anchored.begin(), anchored.end(), body::segment_of_frame(c.base, frame)) != anchored.end();
+  };
+  for (int round = 0; round < options.max_rounds; ++round) {
+    double estimated = a.height;
+    a.spread = track_and_measure(c.recording, c.points, a.set, round == 0 ? a.height : 0.0, c.samples,
+                                 options, estimated);
+    a.height = estimated;
+    int moved = 0;
+    for (std::size_t i = 0; i < c.points.size(); ++i) {
+      if (!fixed.empty() && fixed[i]) continue;
+      const auto row = static_cast<Eigen::Index>(i);
+      int best_frame = a.frame_of[i];
+      double best_spread = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < c.base.frame_count(); ++k)
+        if (neighbours(a.frame_of[i], k) && a.spread.spread(row, k) < best_spread)
+          best_frame = k, best_spread = a.spread.spread(row, k);
+      if (!std::isfinite(best_spread)) continue;
+      const double own = a.spread.spread(row, a.frame_of[i]);
+      if (std::isfinite(own) && (own < options.rigid_spread_mm || !(best_spread < options.move_ratio * own)))
+        best_frame = a.frame_of[i];
+      if (best_frame == a.frame_of[i]) {
+        if ((from_motion(best_frame) || !a.standing[i]) && std::isfinite(own)) {
+          if (from_motion(best_frame)) a.standing[i].reset();
+          place_point(c, a, i, a.spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / a.height));
+        }
+        continue;
+      }
+      ++moved;
+      a.frame_of[i] = best_frame;
+      if (from_motion(best_frame)) a.standing[i].reset();
+      place_point(c, a, i, a.spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / a.height));
+    }
+    a.rounds = round + 1;
+    if (moved == 0) break;
+  }
   double total2 = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    const double own = a.spread.spread(static_cast<Eigen::Index>(i), a.frame_of[i]);
+    const double o = std::isfinite(own) ? own : options.max_spread_mm * 10;
+    total2 += o * o;
+  }
+  a.spread_rms_mm = std::sqrt(total2 / static_cast<double>(c.points.size()));
+}
+
+/// A marker's confidence and spread on its segment.
+struct PlacedMarker {
+  double spread_mm = 0;  ///< on its segment; max_spread_mm * 10 where never measured
+  double confidence = 0;
+};
+
+/// Step 5: the confidence of every marker: the motion's (1 - spread on its segment / spread on
+/// the best other), lowered to the topology's where that is weaker (1 - median distance SD to its
+/// segment's markers / that to the best other segment's), and halved for a marker alone on its
+/// segment, which no other marker can check.
+inline std::vector<PlacedMarker> marker_confidence(const InferenceContext& c, const Attempt& a) {
+  const std::vector<MarkerRigidity> rigidity = marker_rigidity(c.clusters, c.base, c.points, a.frame_of);
+  std::vector<PlacedMarker> placed(c.points.size());
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
     const auto row = static_cast<Eigen::Index>(i);
-    const std::string segment = body::segment_of_frame(base, frame_of[i]);
-    const double own = spread.spread(row, frame_of[i]);
+    const std::string segment = body::segment_of_frame(c.base, a.frame_of[i]);
+    const double own = a.spread.spread(row, a.frame_of[i]);
     double other = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < base.frame_count(); ++k)
-      if (body::segment_of_frame(base, k) != segment) other = std::min(other, spread.spread(row, k));
+    for (int k = 0; k < c.base.frame_count(); ++k)
+      if (body::segment_of_frame(c.base, k) != segment) other = std::min(other, a.spread.spread(row, k));
     double confidence = std::isfinite(other) && std::isfinite(own) ? std::max(0.0, 1.0 - own / other) : 0.0;
     const MarkerRigidity& r = rigidity[i];
     if (!std::isfinite(r.own_sd_mm))
       confidence *= 0.5;
     else if (std::isfinite(r.best_other_sd_mm))
       confidence = std::min(confidence, std::max(0.0, 1.0 - r.own_sd_mm / r.best_other_sd_mm));
-    InferredSegment& s = by_segment[segment];
-    s.segment = segment;
-    ++s.markers;
-    const double o = std::isfinite(own) ? own : options.max_spread_mm * 10;
-    s.spread_mm += o * o;
-    s.confidence += confidence;
-    total2 += o * o;
+    placed[i] = {std::isfinite(own) ? own : c.options.max_spread_mm * 10, confidence};
   }
-  result.spread_mm = std::sqrt(total2 / static_cast<double>(points.size()));
-  for (int k = 0; k < base.frame_count(); ++k) {
-    const auto found = by_segment.find(body::segment_of_frame(base, k));
+  return placed;
+}
+
+}  // namespace detail
+
+S2KF_INLINE InferredMarkerSet infer_marker_set(const MarkerSequence& recording, const SampleSet& samples,
+                                               const MarkerSetInferenceOptions& options) {
+  detail::InferenceContext c{recording, samples, options};
+  c.points = detail::inference_points(recording, options);
+  InferredMarkerSet result;
+  detail::find_clusters(c);
+  result.clusters = c.clusters;
+  detail::choose_template_frames(c);
+  result.up_axis = c.up;
+  c.candidates = detail::template_points(c.base, options.known_sets);
+  std::vector<detail::FramedFit> shortlist = detail::shortlist_template_fits(c);
+  const std::string excluded_note = detail::leave_out_far_points(c, shortlist, {});
+
+  // Each shortlisted fit is carried through the rounds; the one whose markers then ride most
+  // rigidly on their segments is kept.
+  detail::Attempt kept;
+  for (const detail::FramedFit& framed : shortlist) {
+    detail::Attempt a = detail::initial_assignment(c, framed, shortlist.size(), excluded_note);
+    detail::reassignment_rounds(c, a);
+    if (a.spread_rms_mm < kept.spread_rms_mm) kept = std::move(a);
+  }
+  result.template_frame = kept.template_frame;
+  result.rounds = kept.rounds;
+  result.height_mm = kept.height;
+  result.notes = kept.notes;
+
+  const std::vector<detail::PlacedMarker> placed = detail::marker_confidence(c, kept);
+  std::map<std::string, InferredSegment> by_segment;
+  double total2 = 0;
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    InferredSegment& s = by_segment[body::segment_of_frame(c.base, kept.frame_of[i])];
+    s.segment = body::segment_of_frame(c.base, kept.frame_of[i]);
+    ++s.markers;
+    s.spread_mm += placed[i].spread_mm * placed[i].spread_mm;
+    s.confidence += placed[i].confidence;
+    total2 += placed[i].spread_mm * placed[i].spread_mm;
+  }
+  result.spread_mm = std::sqrt(total2 / static_cast<double>(c.points.size()));
+  for (int k = 0; k < c.base.frame_count(); ++k) {
+    const auto found = by_segment.find(body::segment_of_frame(c.base, k));
     if (found == by_segment.end() || found->second.markers == 0) continue;
     InferredSegment s = found->second;
     s.spread_mm = std::sqrt(s.spread_mm / s.markers);
@@ -654,9 +737,10 @@ S2KF_INLINE InferredMarkerSet infer_marker_set(const MarkerSequence& recording, 
     throw std::invalid_argument(s.str());
   }
 
+  body::MarkerSet& set = kept.set;
   std::ostringstream description;
   description << "Inferred by s2kf from the recording's motion (" << result.clusters.clusters.size()
-              << " rigid clusters; " << fitted << "; " << result.rounds
+              << " rigid clusters; " << kept.notes.front() << "; " << result.rounds
               << " round(s) of tracking and reassignment). Segment, markers, confidence:";
   for (const InferredSegment& s : result.segments)
     description << " " << s.segment << " " << s.markers << " " << std::lround(100 * s.confidence) << " %;";

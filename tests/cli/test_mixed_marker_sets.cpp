@@ -1,0 +1,199 @@
+// Mixed marker sets through `s2kf track`: a known set completed by the markers it does not name,
+// placed by their motion. A simulated cluster model (Plug-in Gait upper body, four-marker
+// clusters on pelvis, thighs, shanks and feet) tracks the clustered segments' joints as well as
+// anatomical Plug-in Gait markers do on the same walk; a Plug-in Gait recording with three labels
+// renamed tracks as well as the original; a recording that is no whole body is refused.
+#include "../../apps/s2kf/marker_set_json.hpp"
+
+#include <s2kf/body/marker_set.hpp>
+#include <s2kf/core/constants.hpp>
+#include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/io/c3d_writer.hpp>
+#include <s2kf/io/motion_files.hpp>
+
+#include "address_sanitizer.hpp"
+#include "cli_runner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace s2kf;
+using test_support::data_file;
+using test_support::run_command;
+namespace fs = std::filesystem;
+
+nlohmann::json read_summary(const std::string& prefix) {
+  std::ifstream in(prefix + ".json");
+  return nlohmann::json::parse(in);
+}
+
+/// Tracks `recording` (101 samples, truth from its _truth.csv) into `prefix`; the summary.
+nlohmann::json track(const std::string& recording, const std::string& truth, const std::string& prefix,
+                     const std::string& extra = "") {
+  const auto [status, output] = run_command("track " + recording + " --out " + prefix +
+                                            " --samples 101 --formats csv --truth " + truth + " " + extra);
+  EXPECT_EQ(status, 0) << output;
+  return status == 0 ? read_summary(prefix) : nlohmann::json::object();
+}
+
+/// RMS (deg) over frames 20 on of the joints of `groups` (LH: LHx, LHy, LHz), the written motion
+/// against the truth, both read from their CSV files.
+double joint_rms_deg(const std::string& motion_csv, const std::string& truth_csv,
+                     const std::vector<std::string>& groups) {
+  const io::MotionTable motion = io::load_motion_csv(motion_csv), truth = io::load_motion_csv(truth_csv);
+  double sum2 = 0;
+  long count = 0;
+  for (std::size_t j = 0; j < truth.joint_names.size(); ++j) {
+    const std::string& name = truth.joint_names[j];
+    if (std::find(groups.begin(), groups.end(), name.substr(0, name.size() - 1)) == groups.end()) continue;
+    const auto column = static_cast<Eigen::Index>(body::kRootValues + j);
+    for (Eigen::Index f = 20; f < truth.values.rows(); ++f) {
+      const double e = std::remainder(motion.values(f, column) - truth.values(f, column), 2 * kPi);
+      if (!std::isfinite(e)) continue;
+      sum2 += e * e, ++count;
+    }
+  }
+  return count > 0 ? std::sqrt(sum2 / static_cast<double>(count)) * 180 / kPi : std::nan("");
+}
+
+// The cluster model on a walk, two seeds: every cluster marker lands on its segment, no segment that
+// carries a cluster is "not observed", the mean marker distance stays under 15 mm, and the joint
+// angles of the pelvis, hips, knees and ankles are within 1 degree RMS of those tracked with the
+// anatomical Plug-in Gait markers on the same motion and subject.
+TEST(MixedMarkerSets, ClusterModelTracksItsClusteredSegmentsLikeAnatomicalMarkers) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const std::string clusters = data_file("simulation/plugin_gait_upper_clusters.json");
+  const std::map<std::string, std::string> cluster_segment{{"PEL", "root"}, {"LFM", "LH"}, {"RFM", "RH"},
+                                                           {"LTB", "LK"},   {"RTB", "RK"}, {"LFT", "LA"},
+                                                           {"RFT", "RA"},   {"LGT", "LH"}, {"RGT", "RH"}};
+  for (const int seed : {1, 2}) {
+    const std::string motion = "--motion walk --frames 400 --seed " + std::to_string(seed);
+    const std::string with_clusters = test_support::simulate_with_program(
+        "clusters" + std::to_string(seed), motion + " --markerset " + clusters);
+    const std::string anatomical = test_support::simulate_with_program("anatomical" + std::to_string(seed),
+                                                                       motion + " --markerset plugin_gait");
+    const std::string out = (test_support::scratch("mixed") / ("clusters" + std::to_string(seed))).string();
+    const std::string reference =
+        (test_support::scratch("mixed") / ("anatomical" + std::to_string(seed))).string();
+    const nlohmann::json summary = track(with_clusters + ".c3d", with_clusters + "_truth.csv", out);
+    const nlohmann::json anatomical_summary =
+        track(anatomical + ".c3d", anatomical + "_truth.csv", reference);
+    ASSERT_TRUE(summary.contains("markers_inferred")) << seed;
+    EXPECT_EQ(summary["marker_set"], "plugin_gait_upper+inferred");
+    ASSERT_EQ(summary["markers_inferred"].size(), 30u) << summary["markers_inferred"].dump();
+    for (const auto& marker : summary["markers_inferred"]) {
+      const std::string label = marker["label"];
+      EXPECT_EQ(marker["segment"], cluster_segment.at(label.substr(0, 3))) << label << " seed " << seed;
+    }
+    EXPECT_TRUE(fs::exists(out + "_markerset.json"));
+    EXPECT_EQ(cli::load_marker_set(out + "_markerset.json").entries.size(), 53u);
+    EXPECT_TRUE(summary["unobserved"].is_null()) << summary["unobserved"].dump();
+    EXPECT_LT(summary["mean_marker_distance_all_frames_mm"].get<double>(), 15.0);
+    for (const std::vector<std::string>& groups :
+         {std::vector<std::string>{"LH", "RH"}, {"LK", "RK"}, {"LA", "RA"}}) {
+      const double with = joint_rms_deg(out + ".csv", with_clusters + "_truth.csv", groups);
+      const double without = joint_rms_deg(reference + ".csv", anatomical + "_truth.csv", groups);
+      std::cout << "seed " << seed << " " << groups[0] << "/" << groups[1] << ": clusters " << with
+                << " deg, anatomical " << without << " deg\n";
+      EXPECT_LT(with, without + 1.0) << groups[0] << " seed " << seed;
+    }
+    const double pelvis = summary["truth"]["root_orientation_rms_deg"],
+                 pelvis_anatomical = anatomical_summary["truth"]["root_orientation_rms_deg"];
+    std::cout << "seed " << seed << " pelvis: clusters " << pelvis << " deg, anatomical " << pelvis_anatomical
+              << " deg; marker distance " << summary["mean_marker_distance_all_frames_mm"] << " / "
+              << anatomical_summary["mean_marker_distance_all_frames_mm"] << " mm\n";
+    EXPECT_LT(pelvis, pelvis_anatomical + 1.0) << seed;
+  }
+}
+
+// Plug-in Gait with three labels renamed: the three are placed on their segments by their motion,
+// and the recording tracks within 5 % of the original (marker distance and all-joint RMS).
+TEST(MixedMarkerSets, ThreeRenamedLabelsTrackLikeTheOriginal) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const std::string original = test_support::simulate_with_program(
+      "pig", "--motion walk --frames 400 --seed 3 --markerset plugin_gait");
+  const MarkerSequence recording = c3d::read_c3d(original + ".c3d");
+  std::vector<std::string> labels = recording.labels;
+  const std::map<std::string, std::pair<std::string, std::string>> renamed{
+      {"LKNE", {"KneeLat_L", "LH"}}, {"RTIB", {"ShankR2", "RK"}}, {"LELB", {"ElbowL", "LS"}}};
+  for (std::string& label : labels)
+    if (const auto found = renamed.find(label); found != renamed.end()) label = found->second.first;
+  const std::string renamed_file = (test_support::scratch("mixed") / "pig_renamed.c3d").string();
+  c3d::write_c3d(renamed_file, labels, recording.rate_hz, recording.positions, recording.visible);
+
+  const std::string dir = test_support::scratch("mixed").string();
+  const nlohmann::json before = track(original + ".c3d", original + "_truth.csv", dir + "/pig");
+  const nlohmann::json after = track(renamed_file, original + "_truth.csv", dir + "/pig_renamed");
+  ASSERT_EQ(after["markers_inferred"].size(), 3u) << after["markers_inferred"].dump();
+  for (const auto& marker : after["markers_inferred"]) {
+    bool found = false;
+    for (const auto& [old_label, renaming] : renamed)
+      if (marker["label"] == renaming.first) {
+        found = true;
+        EXPECT_EQ(marker["segment"], renaming.second) << renaming.first;
+      }
+    EXPECT_TRUE(found) << marker.dump();
+  }
+  const double distance_before = before["mean_marker_distance_all_frames_mm"],
+               distance_after = after["mean_marker_distance_all_frames_mm"];
+  const double rms_before = before["truth"]["all_joint_rms_deg"],
+               rms_after = after["truth"]["all_joint_rms_deg"];
+  std::cout << "marker distance " << distance_before << " -> " << distance_after << " mm, all-joint RMS "
+            << rms_before << " -> " << rms_after << " deg\n";
+  EXPECT_LT(distance_after, 1.05 * distance_before);
+  EXPECT_LT(rms_after, 1.05 * rms_before);
+}
+
+// Points that are no markers are left out by name with the reason, and never inferred: a
+// Plug-in Gait recording with a joint centre, an angle output and a segment's axis quartet added.
+TEST(MixedMarkerSets, PointsThatAreNoMarkersAreLeftOutWithTheirReason) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const std::string original = test_support::simulate_with_program(
+      "pig_outputs", "--motion walk --frames 200 --seed 4 --markerset plugin_gait");
+  const MarkerSequence recording = c3d::read_c3d(original + ".c3d");
+  std::vector<std::string> labels = recording.labels;
+  // Copies of existing points under model-output names: they move like markers, so only their
+  // names can tell.
+  const std::vector<std::string> extra{"LHJC", "LKneeAngles", "PELO", "PELA", "PELL", "PELP", "CentreOfMass"};
+  const auto points = static_cast<Eigen::Index>(labels.size());
+  MarkerSequence with_outputs;
+  with_outputs.labels = labels;
+  with_outputs.labels.insert(with_outputs.labels.end(), extra.begin(), extra.end());
+  with_outputs.rate_hz = recording.rate_hz;
+  with_outputs.resize(recording.frame_count());
+  for (Eigen::Index f = 0; f < recording.frame_count(); ++f) {
+    with_outputs.frame(f).leftCols(points) = recording.frame(f);
+    with_outputs.visible.col(f).head(points) = recording.visible.col(f);
+    for (std::size_t e = 0; e < extra.size(); ++e) {
+      const auto p = points + static_cast<Eigen::Index>(e);
+      with_outputs.frame(f).col(p) =
+          recording.frame(f).col(static_cast<Eigen::Index>(e)) + Eigen::Vector3d(0, 0, 30);
+      with_outputs.visible(p, f) = recording.visible(static_cast<Eigen::Index>(e), f);
+    }
+  }
+  const std::string file = (test_support::scratch("mixed") / "pig_outputs.c3d").string();
+  c3d::write_c3d(file, with_outputs.labels, with_outputs.rate_hz, with_outputs.positions,
+                 with_outputs.visible);
+  const nlohmann::json summary =
+      track(file, original + "_truth.csv", (test_support::scratch("mixed") / "pig_outputs").string());
+  EXPECT_TRUE(summary["markers_inferred"].empty()) << summary["markers_inferred"].dump();
+  ASSERT_EQ(summary["labels_left_out"].size(), extra.size()) << summary["labels_left_out"].dump();
+  std::map<std::string, std::string> reason;
+  for (const auto& p : summary["labels_left_out"]) reason[p["label"]] = p["reason"];
+  EXPECT_NE(reason["LHJC"].find("joint centre"), std::string::npos);
+  EXPECT_NE(reason["LKneeAngles"].find("joint angles"), std::string::npos);
+  EXPECT_NE(reason["PELA"].find("segment axis"), std::string::npos);
+  EXPECT_NE(reason["CentreOfMass"].find("centre of mass"), std::string::npos);
+}
+
+}  // namespace
