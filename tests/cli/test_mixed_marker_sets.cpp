@@ -196,4 +196,44 @@ TEST(MixedMarkerSets, PointsThatAreNoMarkersAreLeftOutWithTheirReason) {
   EXPECT_NE(reason["CentreOfMass"].find("centre of mass"), std::string::npos);
 }
 
+// No body, no tracking: the head and trunk markers of a walk, labels scrambled so that no set
+// names them, make a set inferred from the motion that covers only the head and trunk; s2kf track
+// says the recording does not look like a whole body, exits with 1 and writes nothing, unless
+// --force.
+TEST(MixedMarkerSets, ARecordingOfNoWholeBodyIsRefusedUnlessForced) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const std::string original = test_support::simulate_with_program(
+      "head", "--motion walk --frames 300 --seed 5 --markerset plugin_gait");
+  const MarkerSequence recording = c3d::read_c3d(original + ".c3d");
+  std::vector<int> kept;
+  for (std::size_t p = 0; p < recording.labels.size(); ++p)
+    for (const char* head :
+         {"LFHD", "RFHD", "LBHD", "RBHD", "C7", "T10", "CLAV", "STRN", "RBAK", "LSHO", "RSHO"})
+      if (recording.labels[p] == head) kept.push_back(static_cast<int>(p));
+  ASSERT_EQ(kept.size(), 11u);
+  MarkerSequence part;
+  part.rate_hz = recording.rate_hz;
+  for (std::size_t k = 0; k < kept.size(); ++k) part.labels.push_back("h" + std::to_string(k));
+  part.resize(recording.frame_count());
+  for (Eigen::Index f = 0; f < recording.frame_count(); ++f)
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      part.frame(f).col(static_cast<Eigen::Index>(k)) = recording.frame(f).col(kept[k]);
+      part.visible(static_cast<Eigen::Index>(k), f) = recording.visible(kept[k], f);
+    }
+  const std::string file = (test_support::scratch("mixed") / "head.c3d").string();
+  c3d::write_c3d(file, part.labels, part.rate_hz, part.positions, part.visible);
+  const std::string prefix = (test_support::scratch("mixed") / "head").string();
+  fs::remove(prefix + ".json");
+  const auto [status, output] =
+      run_command("track " + file + " --out " + prefix + " --samples 101 --formats csv");
+  EXPECT_EQ(status, 1) << output;
+  EXPECT_NE(output.find("does not look like a whole body"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(prefix + ".json"));
+  EXPECT_FALSE(fs::exists(prefix + "_markerset.json"));
+  const auto [forced, forced_output] =
+      run_command("track " + file + " --out " + prefix + " --samples 101 --formats csv --force");
+  EXPECT_EQ(forced, 0) << forced_output;
+  EXPECT_TRUE(fs::exists(prefix + ".json"));
+}
+
 }  // namespace

@@ -605,7 +605,8 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
   for (std::size_t i = 0; i < fixed.size(); ++i)
     if (fixed[i]) anchored.push_back(body::segment_of_frame(c.base, a.frame_of[i]));
   const auto from_motion = [&](int frame) {
-    return std::find(anchored.begin(), anchored.end(), body::segment_of_frame(c.base, frame)) != anchored.end();
+    return std::find(anchored.begin(), anchored.end(), body::segment_of_frame(c.base, frame)) !=
+           anchored.end();
   };
   for (int round = 0; round < options.max_rounds; ++round) {
     double estimated = a.height;
