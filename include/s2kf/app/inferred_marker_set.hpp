@@ -130,7 +130,14 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
                                                   const std::string& inferred_path, bool force = false) {
   if (!subject.empty()) return choose_marker_set_for(labels, markerset, subject);
   const auto completed = [&](MarkerSetChoice choice) {
-    if (labels_beyond_set(labels, choice.set)) complete_choice(input, choice, inferred_path);
+    if (labels_beyond_set(labels, choice.set)) {
+      complete_choice(input, choice, inferred_path);
+      return choice;
+    }
+    // Nothing to place: the labels the set does not name are no markers by name; say which.
+    for (const std::string& label : body::map_marker_set(labels, choice.set).ignored_labels)
+      if (const auto reason = body::non_marker_reason(label, labels))
+        choice.left_out.push_back({label, *reason});
     return choice;
   };
   if (!markerset.empty()) return completed(choose_marker_set_for(labels, markerset, subject));

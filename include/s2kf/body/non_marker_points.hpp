@@ -34,7 +34,8 @@ inline bool starts_with(const std::string& text, const std::string& head) {
 /// Recognised, case and subject prefix ignored:
 /// - model outputs by their Vicon names: ...Angle(s), ...Force(s), ...Moment(s), ...Power(s),
 ///   ...GRF, ...NRM;
-/// - joint centres: ...JC (LHJC, RKJC, L_HJC), ...JointCentre / ...JointCenter;
+/// - joint centres: ...JC (LHJC, RKJC, L_HJC), ..._JC, ...JointCentre / ...JointCenter;
+/// - virtual points of Motion Analysis' software: V_... (V_Mid_ASIS, V_R.Hip_JC);
 /// - centres of mass: CentreOfMass..., CenterOfMass..., COM, ...COM;
 /// - Plug-in Gait segment axes: NAMEO, NAMEA, NAMEL, NAMEP, all four present.
 inline std::optional<std::string> non_marker_reason(const std::string& label,
@@ -53,9 +54,12 @@ inline std::optional<std::string> non_marker_reason(const std::string& label,
              " stored as a point), no marker";
   if (ends_with(name, "GRF") || ends_with(name, "NRM"))
     return std::string("a model output (ground reaction) stored as a point, no marker");
-  if ((ends_with(name, "JC") && name.size() >= 3 && name.size() <= 6) || ends_with(name, "JOINTCENTRE") ||
-      ends_with(name, "JOINTCENTER") || ends_with(name, "JOINT_CENTRE") || ends_with(name, "JOINT_CENTER"))
+  if ((ends_with(name, "JC") && name.size() >= 3 && name.size() <= 6) || ends_with(name, "_JC") ||
+      ends_with(name, ".JC") || ends_with(name, "JOINTCENTRE") || ends_with(name, "JOINTCENTER") ||
+      ends_with(name, "JOINT_CENTRE") || ends_with(name, "JOINT_CENTER"))
     return std::string("a joint centre computed by the capture software, no marker");
+  if (starts_with(name, "V_"))
+    return std::string("a virtual point of the capture software (V_ prefix), no marker");
   if (starts_with(name, "CENTREOFMASS") || starts_with(name, "CENTEROFMASS") || name == "COM" ||
       ends_with(name, "_COM"))
     return std::string("a centre of mass computed by the capture software, no marker");
