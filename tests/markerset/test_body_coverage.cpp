@@ -34,12 +34,13 @@ TEST(BodyCoverage, PartialSetsOfABodyPassAHeadDoesNot) {
         << name;
   body::MarkerSet face;
   face.name = "face";
-  for (int k = 0; k < 12; ++k)
-    face.entries.push_back({"F" + std::to_string(k),
-                            {},
-                            k < 10 ? "BUN" : "BT",
-                            std::nullopt,
-                            Eigen::Vector3d(10.0 * (k - 6), 80, k < 10 ? 400.0 + 5 * k : 300.0)});
+  for (int k = 0; k < 12; ++k) {
+    body::MarkerSetEntry entry;
+    entry.label = "F" + std::to_string(k);
+    entry.frame = k < 10 ? "BUN" : "BT";
+    entry.offset = Eigen::Vector3d(10.0 * (k - 6), 80, k < 10 ? 400.0 + 5 * k : 300.0);
+    face.entries.push_back(entry);
+  }
   const std::string problem = markerset::whole_body_problem(body::apply_marker_set(base, face));
   EXPECT_NE(problem.find("does not look like a whole body"), std::string::npos) << problem;
   EXPECT_NE(problem.find("only the head and trunk"), std::string::npos) << problem;
