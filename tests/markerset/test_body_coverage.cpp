@@ -44,6 +44,11 @@ TEST(BodyCoverage, PartialSetsOfABodyPassAHeadDoesNot) {
   const std::string problem = markerset::whole_body_problem(body::apply_marker_set(base, face));
   EXPECT_NE(problem.find("does not look like a whole body"), std::string::npos) << problem;
   EXPECT_NE(problem.find("only the head and trunk"), std::string::npos) << problem;
+  // Markers spanning 300 mm of a 1300 mm body: no whole body, whatever segments they were put on.
+  const body::BodyModel whole = body::apply_marker_set(base, cli::resolve_marker_set("plugin_gait"));
+  const std::string small = markerset::whole_body_problem(whole, 300, 1300);
+  EXPECT_NE(small.find("span 300 mm, 23 % of the 1300 mm body"), std::string::npos) << small;
+  EXPECT_EQ(markerset::whole_body_problem(whole, 900, 1750), "");
 }
 
 }  // namespace

@@ -53,7 +53,8 @@ inline markerset::InferredMarkerSet infer_marker_set_file(const std::string& inp
   }
   if (not_a_body) {
     *not_a_body =
-        markerset::whole_body_problem(body::apply_marker_set(body::mmm_body_model(1000), inferred.set));
+        markerset::whole_body_problem(body::apply_marker_set(body::mmm_body_model(1000), inferred.set),
+                                      markerset::marker_extent_mm(recording), inferred.height_mm);
     if (!not_a_body->empty()) return inferred;
   }
   inferred.set.name = std::filesystem::path(out).stem().string();

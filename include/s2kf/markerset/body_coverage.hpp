@@ -1,11 +1,17 @@
 /// @file
-/// Whether a marker set describes a whole body: the regions (trunk, head, arms, legs) its markers
-/// ride on. A set inferred from a recording whose markers cover fewer than three regions (a face,
-/// one arm, an object) does not describe a body the tracker can follow, and the program says so.
+/// Whether a marker set inferred from a recording describes a whole body: how far its markers
+/// spread against the body's height, and the regions (trunk, head, arms, legs) they ride on. A face
+/// or an object does not describe a body the tracker can follow, and the program says so.
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/io/marker_sequence.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
 
 #include <map>
 #include <string>
@@ -50,9 +56,39 @@ inline std::vector<std::string> covered_regions(const body::BodyModel& model) {
   return covered;
 }
 
-/// A sentence saying why `model`'s markers do not describe a whole body (fewer than three regions
-/// with two markers each), or empty when they do.
-inline std::string whole_body_problem(const body::BodyModel& model) {
+/// The markers' extent: the median, over up to 200 frames spread over the recording, of the
+/// diagonal of the box around the labelled points seen in the frame (mm).
+inline double marker_extent_mm(const MarkerSequence& recording) {
+  std::vector<double> diagonals;
+  const Eigen::Index frames = recording.frame_count(), step = std::max<Eigen::Index>(1, frames / 200);
+  for (Eigen::Index f = 0; f < frames; f += step) {
+    Eigen::Vector3d low = Eigen::Vector3d::Constant(INFINITY), high = -low;
+    int seen = 0;
+    for (Eigen::Index p = 0; p < recording.point_count(); ++p)
+      if (recording.visible(p, f) && !recording.labels[static_cast<std::size_t>(p)].empty()) {
+        low = low.cwiseMin(recording.frame(f).col(p)), high = high.cwiseMax(recording.frame(f).col(p));
+        ++seen;
+      }
+    if (seen >= 2) diagonals.push_back((high - low).norm());
+  }
+  if (diagonals.empty()) return 0;
+  std::nth_element(diagonals.begin(), diagonals.begin() + static_cast<long>(diagonals.size() / 2),
+                   diagonals.end());
+  return diagonals[diagonals.size() / 2];
+}
+
+/// A sentence saying why `model`'s markers do not describe a whole body, or empty when they do:
+/// they span less than 35 % of the body's height `height_mm` (`extent_mm`, marker_extent_mm: a
+/// face, a hand; a lower-body or upper-body set spans over half), or they ride on fewer than three
+/// regions with two markers each.
+inline std::string whole_body_problem(const body::BodyModel& model, double extent_mm = NAN,
+                                      double height_mm = NAN) {
+  if (extent_mm < 0.35 * height_mm)
+    return "the recording does not look like a whole body: its markers span " +
+           std::to_string(std::lround(extent_mm)) + " mm, " +
+           std::to_string(std::lround(100 * extent_mm / height_mm)) + " % of the " +
+           std::to_string(std::lround(height_mm)) +
+           " mm body fitted to them (a whole body's markers span at least 35 %)";
   const std::vector<std::string> covered = covered_regions(model);
   if (covered.size() >= 3) return {};
   std::string list;
