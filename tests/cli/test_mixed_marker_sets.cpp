@@ -214,23 +214,21 @@ TEST(MixedMarkerSets, PointsThatAreNoMarkersAreLeftOutWithTheirReason) {
 }
 
 // No body, no tracking: ten markers on the head and four on the shoulders of a subject sweeping
-// every joint, labels that no set names. The set inferred from the motion spans a fraction of the
-// body fitted to it (the inference, made for bodies, spreads the markers over pelvis, arms and
-// legs); s2kf track says the recording does not look like a whole body, exits with 1 and writes
-// nothing, unless --force.
+// every joint, labels that no set names. The inference, made for bodies, fits them to a whole body
+// anyway (without this check s2kf track tracked it as one at 19 mm); s2kf track now says the
+// recording does not look like a whole body, exits with 1 and writes nothing, unless --force.
 TEST(MixedMarkerSets, ARecordingOfNoWholeBodyIsRefusedUnlessForced) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path face_set = test_support::scratch("mixed") / "face.json";
   {
     std::ofstream out(face_set);
     out << R"({"name": "face", "reference_height_mm": 1000, "markers": [
-      {"label": "F0", "frame": "BUN", "offset": [-30, 44, 440]}, {"label": "F1", "frame": "BUN", "offset": [30, 43, 440]},
-      {"label": "F2", "frame": "BUN", "offset": [-31, -44, 425]}, {"label": "F3", "frame": "BUN", "offset": [31, -43, 425]},
-      {"label": "F4", "frame": "BUN", "offset": [0, 60, 400]}, {"label": "F5", "frame": "BUN", "offset": [-40, 50, 380]},
-      {"label": "F6", "frame": "BUN", "offset": [40, 50, 380]}, {"label": "F7", "frame": "BUN", "offset": [0, 70, 360]},
-      {"label": "F8", "frame": "BUN", "offset": [-45, 0, 400]}, {"label": "F9", "frame": "BUN", "offset": [45, 0, 400]},
-      {"label": "T0", "frame": "BT", "offset": [0, -39, 309]}, {"label": "T1", "frame": "BT", "offset": [0, 52, 278]},
-      {"label": "T2", "frame": "BT", "offset": [-95, -1, 308]}, {"label": "T3", "frame": "BT", "offset": [95, -1, 308]}]})";
+      {"label": "F0", "like": "LFHD"}, {"label": "F1", "like": "RFHD"}, {"label": "F2", "like": "LBHD"},
+      {"label": "F3", "like": "RBHD"}, {"label": "F4", "like": "LFHD", "offset": [30, 15, -30]},
+      {"label": "F5", "like": "LFHD", "offset": [-5, 5, -50]}, {"label": "F6", "like": "RFHD", "offset": [5, 5, -50]},
+      {"label": "F7", "like": "LFHD", "offset": [30, 25, -70]}, {"label": "F8", "like": "LFHD", "offset": [-15, -40, -30]},
+      {"label": "F9", "like": "RFHD", "offset": [15, -40, -30]}, {"label": "T0", "like": "C7"},
+      {"label": "T1", "like": "CLAV"}, {"label": "T2", "like": "LSHO"}, {"label": "T3", "like": "RSHO"}]})";
   }
   const std::string face = test_support::simulate_with_program(
       "face", "--motion random_sweep --frames 400 --seed 5 --markerset " + face_set.string());
