@@ -131,7 +131,8 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
                                                   const std::string& inferred_path, bool force = false) {
   if (!subject.empty()) return choose_marker_set_for(labels, markerset, subject);
   const auto completed = [&](MarkerSetChoice choice) {
-    if (labels_beyond_set(labels, choice.set)) {
+    // Only a file can be read again (not a live source, HOST:PORT): there the labels stay ignored.
+    if (labels_beyond_set(labels, choice.set) && std::filesystem::is_regular_file(input)) {
       complete_choice(input, choice, inferred_path);
       return choice;
     }
