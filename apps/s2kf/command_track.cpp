@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,11 +28,18 @@ namespace fs = std::filesystem;
 
 /// --static: the subject calibrated on the static trial in its reference pose (as `s2kf calibrate
 /// STATIC --static` does), written to `path` as a subject file before any recording is
-/// tracked with it.
-void calibrate_on_static_trial(const TrackSettings& settings, const std::string& path) {
+/// tracked with it. Markers the set does not name are placed by the motion of `recording` (the
+/// first tracked), their set written to `completed_path`, and calibrated with the others.
+void calibrate_on_static_trial(const TrackSettings& settings, const std::string& path,
+                               const std::string& recording, const std::string& completed_path) {
   const app::TrackRequest& request = settings.request;
-  const CalibratedSubject calibrated = app::calibrate_static_trial(
-      request, cached_sample_set(46, request.samples), fs::path(path).stem().string());
+  const std::optional<MarkerSetChoice> completed =
+      fs::is_regular_file(recording) ? app::completed_set_for_static_trial(request, recording, completed_path)
+                                     : std::nullopt;
+  if (completed && !settings.quiet) std::cout << recording << ": marker set " << completed->source << "\n";
+  const CalibratedSubject calibrated =
+      app::calibrate_static_trial(request, cached_sample_set(46, request.samples),
+                                  fs::path(path).stem().string(), completed ? &completed->set : nullptr);
   if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
   write_subject_file(path, subject_document(calibrated, request.static_trial));
   if (settings.quiet) return;
@@ -77,7 +85,7 @@ void run_track(const TrackSettings& given) {
                                       (fs::path(static_trial).stem().string() + "_subject.json"))
                                          .string()
                                    : prefixes[0] + "_subject.json";
-    calibrate_on_static_trial(settings, path);
+    calibrate_on_static_trial(settings, path, todo[0].input, prefixes[0] + "_markerset.json");
     if (request.static_refine) {  // the subject as the marker set the recording is calibrated from
       request.markerset = path;
       request.subject.clear();

@@ -99,6 +99,7 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
   recording.input = input.name;
   recording.raw_labels = input.raw_labels;
   recording.file_warnings = input.warnings;
+  recording.readable_file = fs::is_regular_file(input.name);  // not a live source (HOST:PORT)
   recording.inferred_markerset_path = prefix + "_markerset.json";
   app::PreparedTrack prepared = app::prepare_track(*input.prepare, recording, settings.request);
   const pipeline::Session& session = prepared.session;

@@ -112,6 +112,8 @@ std::unique_ptr<TrackResult> track(const py::object& recording, const py::object
       c3d::C3dFrameSource source(path);
       app::RecordingDescription description;
       description.input = path;
+      description.readable_file =
+          true;  // labels the set does not name placed by their motion, as the program
       for (const c3d::PointLabel& label : source.info().labels) description.raw_labels.push_back(label.raw);
       description.file_warnings = source.info().warnings;
       return track_request(source, description, fs::path(path).stem().string(), request);
@@ -339,7 +341,7 @@ void bind_track(py::module_& module) {
          int calibration_samples, double calibration_shrink, bool uniform_noise, bool smooth, int samples,
          double height, const py::object& height_mm, const std::string& preset,
          const std::string& motion_model, const std::string& gain, const std::string& method,
-         const py::object& truth, const py::object& model_output, const py::object& name) {
+         const py::object& truth, bool force, const py::object& model_output, const py::object& name) {
         const auto text = [](const py::object& value) {
           return value.is_none() ? std::string() : py::str(value).cast<std::string>();
         };
@@ -367,6 +369,7 @@ void bind_track(py::module_& module) {
         request.gain = gain;
         request.method = method;
         request.truth = text(truth);
+        request.force = force;
         return track(recording, labels, rate, request, model_output, name);
       },
       py::arg("recording"), py::arg("labels") = py::none(), py::arg("rate") = py::none(), py::kw_only(),
@@ -381,7 +384,7 @@ void bind_track(py::module_& module) {
       py::arg("samples") = defaults.samples, py::arg("height") = defaults.height_mm,
       py::arg("height_mm") = py::none(), py::arg("preset") = defaults.preset,
       py::arg("motion_model") = defaults.motion_model, py::arg("gain") = defaults.gain,
-      py::arg("method") = defaults.method, py::arg("truth") = py::none(),
+      py::arg("method") = defaults.method, py::arg("truth") = py::none(), py::arg("force") = defaults.force,
       py::arg("model_output") = py::none(), py::arg("name") = py::none(),
       "Tracks a whole recording as `s2kf track` does, with its options as keywords (dashes as "
       "underscores, the same defaults): track('walk.c3d'), track(s2kf.read_c3d(...)), or track(points, "
@@ -399,7 +402,9 @@ void bind_track(py::module_& module) {
       "calibration residual's); smooth: RTS smoothing; height: mm, 0 estimates it (height_mm: the same, "
       "its former name); motion_model: 'random-walk' or 'constant-velocity'; gain: 'information-form' or "
       "'square-root' (the exact update); truth: a ground-truth motion CSV, whose accuracy goes into the "
-      "summary; model_output: (P,) bool, points that are not markers. Runs without the GIL. Returns a "
+      "summary; force: track a C3D file even when the set inferred from its motion does not look like a "
+      "whole body; "
+      "model_output: (P,) bool, points that are not markers. Runs without the GIL. Returns a "
       "TrackResult.");
 
   module.def(

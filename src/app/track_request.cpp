@@ -9,6 +9,7 @@
 #include <s2kf/app/user_error.hpp>
 
 #include <s2kf/evaluation/truth_metrics.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
 
@@ -166,13 +167,24 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   pipeline::SessionOptions options = session_options(request, source.rate_hz());
   prepared.samples = cached_sample_set(46, request.samples);
   if (!request.static_trial.empty()) {
-    // The subject calibrated on the static trial (`s2kf calibrate --static`), then the recording
-    // tracked with it as with a subject file, or calibrated again from it (static_refine).
+    // The subject calibrated on the static trial (`s2kf calibrate --static`), with the markers the
+    // set does not name placed by the recording's motion first (a static trial shows none), then
+    // the recording tracked with it as with a subject file, or calibrated again from it (static_refine).
+    const std::optional<MarkerSetChoice> completed =
+        recording.readable_file
+            ? completed_set_for_static_trial(request, input, recording.inferred_markerset_path)
+            : std::nullopt;
     const CalibratedSubject calibrated = calibrate_static_trial(
-        request, prepared.samples, std::filesystem::path(input).stem().string() + "_subject");
+        request, prepared.samples, std::filesystem::path(input).stem().string() + "_subject",
+        completed ? &completed->set : nullptr);
     prepared.choice.set = calibrated.subject;
     prepared.choice.source = "calibrated on the static trial " + request.static_trial;
-  } else if (!recording.inferred_markerset_path.empty()) {
+    if (completed) {
+      prepared.choice.source += "; " + completed->source;
+      prepared.choice.inferred = completed->inferred;
+      prepared.choice.left_out = completed->left_out;
+    }
+  } else if (recording.readable_file) {
     prepared.choice = choose_or_infer_marker_set(input, source.labels(), request.markerset, request.subject,
                                                  recording.inferred_markerset_path, request.force);
   } else {
@@ -270,9 +282,26 @@ SubjectSettings static_trial_settings(const TrackRequest& request) {
 }
 
 CalibratedSubject calibrate_static_trial(const TrackRequest& request, const SampleSet& samples,
-                                         const std::string& name) {
-  return calibrate_subject_file(request.static_trial, option_name(request, "static"),
-                                static_trial_settings(request), samples, name);
+                                         const std::string& name, const body::MarkerSet* set) {
+  SubjectSettings settings = static_trial_settings(request);
+  if (set) settings.set = *set;
+  return calibrate_subject_file(request.static_trial, option_name(request, "static"), settings, samples,
+                                name);
+}
+
+std::optional<MarkerSetChoice> completed_set_for_static_trial(const TrackRequest& request,
+                                                              const std::string& recording_path,
+                                                              const std::string& completed_path) {
+  std::vector<std::string> labels;
+  try {
+    labels = c3d::C3dFrameSource(recording_path).labels();
+  } catch (const std::exception& e) {
+    throw UserError(e.what());
+  }
+  MarkerSetChoice choice = choose_or_infer_marker_set(recording_path, labels, request.markerset, "",
+                                                      completed_path, request.force);
+  if (choice.inferred.empty()) return std::nullopt;
+  return choice;
 }
 
 }  // namespace s2kf::app

@@ -4,7 +4,7 @@
 // clustered segments, the hips and knees following the truth as closely as anatomical Plug-in
 // Gait markers do on the same walk; a Plug-in Gait recording with three labels
 // renamed tracks as well as the original; a recording that is no whole body is refused.
-#include "../../apps/s2kf/marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/core/constants.hpp>
@@ -111,7 +111,7 @@ TEST(MixedMarkerSets, ClusterModelTracksItsClusteredSegmentsLikeAnatomicalMarker
     }
     EXPECT_GE(on_true_segment, 27) << summary["markers_inferred"].dump();
     EXPECT_TRUE(fs::exists(out + "_markerset.json"));
-    EXPECT_EQ(cli::load_marker_set(out + "_markerset.json").entries.size(), 53u);
+    EXPECT_EQ(app::load_marker_set(out + "_markerset.json").entries.size(), 53u);
     EXPECT_TRUE(summary["unobserved"].is_null()) << summary["unobserved"].dump();
     EXPECT_LT(summary["mean_marker_distance_all_frames_mm"].get<double>(), 15.0);
     for (const std::vector<std::string>& groups :

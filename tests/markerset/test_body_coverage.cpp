@@ -1,6 +1,6 @@
 // Whether a marker set describes a whole body: the regions its markers ride on, by the model's
 // kinematic tree; a head-and-neck set does not, a lower-body or an upper-body set does.
-#include "../../apps/s2kf/marker_set_json.hpp"
+#include <s2kf/app/marker_set_json.hpp>
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
@@ -30,7 +30,7 @@ TEST(BodyCoverage, RegionsFollowTheKinematicTree) {
 TEST(BodyCoverage, PartialSetsOfABodyPassAHeadDoesNot) {
   const body::BodyModel base = body::mmm_body_model(1000);
   for (const char* name : {"plugin_gait", "plugin_gait_lower", "plugin_gait_upper", "cmu"})
-    EXPECT_EQ(markerset::whole_body_problem(body::apply_marker_set(base, cli::resolve_marker_set(name))), "")
+    EXPECT_EQ(markerset::whole_body_problem(body::apply_marker_set(base, app::resolve_marker_set(name))), "")
         << name;
   body::MarkerSet face;
   face.name = "face";
@@ -45,7 +45,7 @@ TEST(BodyCoverage, PartialSetsOfABodyPassAHeadDoesNot) {
   EXPECT_NE(problem.find("does not look like a whole body"), std::string::npos) << problem;
   EXPECT_NE(problem.find("only the head and trunk"), std::string::npos) << problem;
   // Markers spanning 300 mm of a 1300 mm body: no whole body, whatever segments they were put on.
-  const body::BodyModel whole = body::apply_marker_set(base, cli::resolve_marker_set("plugin_gait"));
+  const body::BodyModel whole = body::apply_marker_set(base, app::resolve_marker_set("plugin_gait"));
   const std::string small = markerset::whole_body_problem(whole, 300, 1300);
   EXPECT_NE(small.find("span 300 mm, 23 % of the 1300 mm body"), std::string::npos) << small;
   EXPECT_EQ(markerset::whole_body_problem(whole, 900, 1750), "");

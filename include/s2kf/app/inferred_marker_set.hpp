@@ -27,7 +27,8 @@ namespace s2kf::app {
 /// default 301.
 inline constexpr int kInferenceSamples = 101;
 
-/// Infers a marker set for the recording at `input` and writes it to `out` (atomically). `up_axis`:
+/// Infers a marker set for the recording at `input` and writes it to `out` (atomically; empty: not
+/// written, the set named after the recording). `up_axis`:
 /// 0-2, or -1 to find it. Throws UserError with one sentence when the recording cannot be read or
 /// its markers cannot be placed unambiguously.
 /// Where `not_a_body` is given and the inferred set does not look like a whole body
@@ -57,6 +58,10 @@ inline markerset::InferredMarkerSet infer_marker_set_file(const std::string& inp
                                       markerset::marker_extent_mm(recording), inferred.height_mm);
     if (!not_a_body->empty()) return inferred;
   }
+  if (out.empty()) {
+    inferred.set.name = std::filesystem::path(input).stem().string() + "_markerset";
+    return inferred;
+  }
   inferred.set.name = std::filesystem::path(out).stem().string();
   if (std::filesystem::path(out).has_parent_path())
     std::filesystem::create_directories(std::filesystem::path(out).parent_path());
@@ -83,7 +88,7 @@ inline bool labels_beyond_set(const std::vector<std::string>& labels, const body
 
 /// `choice` completed for the recording at `input`: the labels its set does not name placed on
 /// the segments they ride on (markerset::complete_marker_set), the combined set written to
-/// `completed_path` when any was placed; the choice's source says so.
+/// `completed_path` (unless empty) when any was placed; the choice's source says so.
 inline void complete_choice(const std::string& input, MarkerSetChoice& choice,
                             const std::string& completed_path) {
   MarkerSequence recording;
@@ -107,24 +112,26 @@ inline void complete_choice(const std::string& input, MarkerSetChoice& choice,
   choice.left_out = completed.left_out;
   if (completed.inferred.empty()) return;
   completed.set.name = choice.set.name + "+inferred";
-  if (std::filesystem::path(completed_path).has_parent_path())
-    std::filesystem::create_directories(std::filesystem::path(completed_path).parent_path());
-  io::write_file_atomically(completed_path, [&](std::ostream& stream) {
-    stream << marker_set_to_json(completed.set).dump(2) << "\n";
-  });
+  if (!completed_path.empty()) {
+    if (std::filesystem::path(completed_path).has_parent_path())
+      std::filesystem::create_directories(std::filesystem::path(completed_path).parent_path());
+    io::write_file_atomically(completed_path, [&](std::ostream& stream) {
+      stream << marker_set_to_json(completed.set).dump(2) << "\n";
+    });
+  }
   choice.set = completed.set;
   choice.source += "; with " + std::to_string(completed.inferred.size()) +
                    " marker(s) it does not name placed by their motion (label segment confidence:";
   for (const markerset::CompletedMarker& m : completed.inferred)
     choice.source +=
         " " + m.label + " " + m.segment + " " + std::to_string(std::lround(100 * m.confidence)) + " %";
-  choice.source += "), written to " + completed_path;
+  choice.source += completed_path.empty() ? ")" : "), written to " + completed_path;
 }
 
 /// choose_marker_set_for, completed with the labels the chosen set does not name (complete_choice);
 /// when neither option names a set and no bundled set fits the labels, a set inferred from the
-/// recording itself, written to `inferred_path`, refused where it does not look like a whole body
-/// unless `force`; the choice's source says what was done. A subject file is used as it is.
+/// recording itself, written to `inferred_path` (unless empty), refused where it does not look like a whole
+/// body unless `force`; the choice's source says what was done. A subject file is used as it is.
 inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
                                                   const std::vector<std::string>& labels,
                                                   const std::string& markerset, const std::string& subject,
@@ -175,7 +182,8 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
            : sets[static_cast<std::size_t>(best)].name + " with " +
                  std::to_string(
                      body::map_marker_set(labels, sets[static_cast<std::size_t>(best)]).markers_used())) +
-      "); written to " + inferred_path + "; " + inferred.notes.front() + "; confidence per segment:";
+      ")" + (inferred_path.empty() ? std::string() : "; written to " + inferred_path) + "; " +
+      inferred.notes.front() + "; confidence per segment:";
   for (const markerset::InferredSegment& s : inferred.segments)
     choice.source += " " + s.segment + " " + std::to_string(std::lround(100 * s.confidence)) + " %";
   return choice;

@@ -64,7 +64,7 @@ struct TrackRequest {
   bool smooth = false;                       ///< offline Rauch-Tung-Striebel smoothing
   /// Memory smoothing may take (it keeps every frame's posterior) before a recording is refused.
   double smoothing_memory_limit_bytes = 8e9;
-  std::string truth;  ///< a ground-truth motion CSV (s2kf simulate's _truth.csv): accuracy in the summary
+  std::string truth;   ///< a ground-truth motion CSV (s2kf simulate's _truth.csv): accuracy in the summary
   bool force = false;  ///< track even a recording whose inferred marker set does not look like a whole body
   OptionNames names = OptionNames::program;  ///< not an option: the front end's spelling in messages
 };
@@ -85,8 +85,11 @@ struct RecordingDescription {
   std::string input;                       ///< names the recording in messages and the summary
   std::vector<std::string> raw_labels;     ///< one per point (model outputs keep their names), or empty
   std::vector<std::string> file_warnings;  ///< the reader's
-  /// A C3D file's path and where a marker set inferred from it is written when no bundled set fits
-  /// the labels (PREFIX_markerset.json); empty: no inference, the best bundled set or an error.
+  /// Whether `input` is a C3D file the marker-set choice may read again: to place the labels the
+  /// chosen set does not name by their motion, or to infer a set when no bundled set fits the
+  /// labels. Else (arrays, live streams) the set's labels are mapped and the others ignored.
+  bool readable_file = false;
+  /// Where such a completed or inferred set is written (PREFIX_markerset.json); empty: not written.
   std::string inferred_markerset_path;
 };
 
@@ -129,8 +132,17 @@ nlohmann::json summarize_track(const PreparedTrack& prepared, const track::Track
 SubjectSettings static_trial_settings(const TrackRequest& request);
 
 /// The subject calibrated on the request's static trial in the pose it names (or the one found
-/// from the data), as `s2kf calibrate --static`, named `name`, with every core.
+/// from the data), as `s2kf calibrate --static`, named `name`, with every core; with `set`
+/// (completed_set_for_static_trial) instead of the request's or the best bundled one where given.
 CalibratedSubject calibrate_static_trial(const TrackRequest& request, const SampleSet& samples,
-                                         const std::string& name);
+                                         const std::string& name, const body::MarkerSet* set = nullptr);
+
+/// With a static trial: when the C3D file at `recording_path`, tracked with it, has markers the
+/// chosen set does not name (a cluster model), that set completed by their motion in the recording
+/// (a static trial shows no motion to place them by) and written to `completed_path` (unless
+/// empty), to calibrate the static trial with; nothing when there is nothing to place.
+std::optional<MarkerSetChoice> completed_set_for_static_trial(const TrackRequest& request,
+                                                              const std::string& recording_path,
+                                                              const std::string& completed_path);
 
 }  // namespace s2kf::app
