@@ -2,6 +2,7 @@
 track_request.hpp): every option of the program is a keyword of s2kf.track (dashes as underscores)
 with the same default, but for the program's own options listed below; and both give the same
 numbers on a bundled recording."""
+import json
 import re
 import subprocess
 
@@ -112,3 +113,26 @@ def test_both_give_the_same_joint_angles_on_the_walk(cli, tmp_path, data_dir):
     for column in ours.dtype.names[8:]:  # the 40 joint angles (after frame, time and the root)
         np.testing.assert_allclose(ours[column], theirs[column], rtol=0, atol=1e-9, err_msg=column)
     assert np.isfinite(result.joints[100:]).all()
+
+
+def test_both_place_the_labels_the_set_does_not_name(cli, tmp_path, data_dir):
+    """The walk with three labels renamed: the program and s2kf.track both place the three by their
+    motion on the same segments and give the same joint angles (the marker-set choice is shared)."""
+    labels, rate, points = s2kf.read_c3d(str(data_dir / "walk.c3d"))
+    renamed = {"LKNE": "KneeLat_L", "RTIP": "ShankR2", "LAEL": "ElbowL"}
+    recording = tmp_path / "walk_renamed.c3d"
+    s2kf.write_c3d(str(recording), [renamed.get(label, label) for label in labels], rate, points)
+    cli("track", recording, "--out", tmp_path / "cli", "--quiet", "--formats", "csv", "--samples", "101",
+        "--no-calibrate")
+    result = s2kf.track(str(recording), samples=101, calibrate=False)
+    result.to_csv(str(tmp_path / "py.csv"))
+    with open(tmp_path / "cli.json") as f:
+        program = json.load(f)
+    placed = {m["label"]: m["segment"] for m in result.summary["markers_inferred"]}
+    assert set(placed) == set(renamed.values()), result.summary["markers_inferred"]
+    assert placed == {m["label"]: m["segment"] for m in program["markers_inferred"]}
+    ours = np.genfromtxt(tmp_path / "py.csv", delimiter=",", names=True)
+    theirs = np.genfromtxt(tmp_path / "cli.csv", delimiter=",", names=True)
+    for column in ours.dtype.names[8:]:
+        np.testing.assert_allclose(ours[column], theirs[column], rtol=0, atol=1e-9, err_msg=column)
+    assert (tmp_path / "cli_markerset.json").exists() and not (tmp_path / "py_markerset.json").exists()
