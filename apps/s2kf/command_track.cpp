@@ -30,8 +30,10 @@ namespace fs = std::filesystem;
 /// STATIC --static` does), written to `path` as a subject file before any recording is
 /// tracked with it. Markers the set does not name are placed by the motion of `recording` (the
 /// first tracked), their set written to `completed_path`, and calibrated with the others.
-void calibrate_on_static_trial(const TrackSettings& settings, const std::string& path,
-                               const std::string& recording, const std::string& completed_path) {
+std::optional<MarkerSetChoice> calibrate_on_static_trial(const TrackSettings& settings,
+                                                         const std::string& path,
+                                                         const std::string& recording,
+                                                         const std::string& completed_path) {
   const app::TrackRequest& request = settings.request;
   const std::optional<MarkerSetChoice> completed =
       fs::is_regular_file(recording) ? app::completed_set_for_static_trial(request, recording, completed_path)
@@ -42,13 +44,14 @@ void calibrate_on_static_trial(const TrackSettings& settings, const std::string&
                                   fs::path(path).stem().string(), completed ? &completed->set : nullptr);
   if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
   write_subject_file(path, subject_document(calibrated, request.static_trial));
-  if (settings.quiet) return;
+  if (settings.quiet) return completed;
   const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
   std::cout << fs::path(request.static_trial).filename().string() << " (static trial): mean marker distance "
             << fixed_text(calibration.mean_marker_distance_before_mm, 1) << " mm with the marker set, "
             << fixed_text(calibration.mean_marker_distance_after_mm, 1) << " mm after calibrating in the "
             << static_posture_text(calibrated, app::static_trial_settings(request)) << "; wrote " << path
             << "\n";
+  return completed;
 }
 
 void run_track(const TrackSettings& given) {
@@ -85,7 +88,8 @@ void run_track(const TrackSettings& given) {
                                       (fs::path(static_trial).stem().string() + "_subject.json"))
                                          .string()
                                    : prefixes[0] + "_subject.json";
-    calibrate_on_static_trial(settings, path, todo[0].input, prefixes[0] + "_markerset.json");
+    std::optional<MarkerSetChoice> placed =
+        calibrate_on_static_trial(settings, path, todo[0].input, prefixes[0] + "_markerset.json");
     if (request.static_refine) {  // the subject as the marker set the recording is calibrated from
       request.markerset = path;
       request.subject.clear();
@@ -94,6 +98,7 @@ void run_track(const TrackSettings& given) {
     } else {
       request.subject = path;
       request.markerset.clear();
+      settings.placed_for_static = std::move(placed);  // listed in each summary
     }
     request.static_trial.clear();
   }

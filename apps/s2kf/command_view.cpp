@@ -2,9 +2,9 @@
 // The body model the motion was tracked with is rebuilt the way `s2kf track` built it (marker set,
 // height and subject calibration from the summary, on the same recording), so the page shows the
 // same joint centres and model markers as `s2kf track --html`.
-#include "command.hpp"
 #include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/sample_sets.hpp>
+#include "command.hpp"
 #include "viewer/result_page.hpp"
 
 #include <s2kf/io/c3d_frame_source.hpp>
@@ -32,7 +32,7 @@ const std::string kSubjectSource = "subject file ";
 /// again with the summary's marker set, height, preset, sample count and calibration window. The
 /// calibration is deterministic, so the same frames and options give the same subject.
 std::pair<body::BodyModel, body::MarkerMapping> tracked_model(const std::string& prefix,
-                                                               const nlohmann::json& summary) {
+                                                              const nlohmann::json& summary) {
   const std::string where = prefix + ".json";
   const std::string input = viewer::recording_path(prefix, summary);
   std::unique_ptr<c3d::C3dFrameSource> source;
@@ -44,10 +44,10 @@ std::pair<body::BodyModel, body::MarkerMapping> tracked_model(const std::string&
   std::string markerset, subject;
   const std::string origin = summary.value("marker_set_source", std::string());
   const nlohmann::json placed = summary.value("markers_inferred", nlohmann::json::array());
-  if (placed.is_array() && !placed.empty())  // s2kf track wrote the completed set beside its outputs
-    markerset = prefix + "_markerset.json";
-  else if (origin.rfind(kSubjectSource, 0) == 0)
+  if (origin.rfind(kSubjectSource, 0) == 0)  // (with --static, the placed markers are in it too)
     subject = origin.substr(kSubjectSource.size());
+  else if (placed.is_array() && !placed.empty())  // s2kf track wrote the completed set beside its outputs
+    markerset = prefix + "_markerset.json";
   else if (origin == "given")
     markerset = summary["marker_set"].is_string() ? summary["marker_set"].get<std::string>() : std::string();
   else if (origin.rfind("inferred", 0) == 0)  // s2kf track wrote the inferred set beside its outputs
@@ -84,8 +84,8 @@ std::pair<body::BodyModel, body::MarkerMapping> tracked_model(const std::string&
   }
   pipeline::Session session;
   try {
-    session =
-        pipeline::prepare_session(*source, choice.set, options, cached_sample_set(46, options.tracker.samples));
+    session = pipeline::prepare_session(*source, choice.set, options,
+                                        cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": " + e.what());
   }

@@ -102,6 +102,11 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
   recording.readable_file = fs::is_regular_file(input.name);  // not a live source (HOST:PORT)
   recording.inferred_markerset_path = prefix + "_markerset.json";
   app::PreparedTrack prepared = app::prepare_track(*input.prepare, recording, settings.request);
+  if (settings.placed_for_static) {  // the subject file's set holds them; say which were placed
+    prepared.choice.inferred = settings.placed_for_static->inferred;
+    prepared.choice.left_out = settings.placed_for_static->left_out;
+    prepared.messages = app::marker_set_messages(prepared.choice, prepared.session.mapping);
+  }
   const pipeline::Session& session = prepared.session;
   if (extra.on_prepared) extra.on_prepared(session);
 

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,9 @@ struct TrackSettings {
   bool verbose = false;         // also print the seconds per stage
   bool html = false;            // also write PREFIX.html, the interactive 3D page (s2kf view)
   app::OutputSettings outputs;  // --formats, --bvh-units, --derivatives (app/extra_outputs.hpp)
+  // --static: the markers the set does not name, placed by the first recording's motion before the
+  // static trial was calibrated with them; each summary lists them.
+  std::optional<app::MarkerSetChoice> placed_for_static;
 };
 
 struct TrackOutcome {

@@ -158,6 +158,7 @@ TEST(MixedMarkerSets, AStaticTrialGivesTheClusterModelTheZeroOfItsJointAngles) {
   const nlohmann::json& summary = summaries["clusters"];
   ASSERT_TRUE(summary.contains("markers_used")) << summary.dump();
   EXPECT_EQ(summary["markers_used"].size(), 53u);  // the subject calibrated on the static trial has them all
+  EXPECT_EQ(summary["markers_inferred"].size(), 30u) << summary["markers_inferred"].dump();
   ASSERT_TRUE(fs::exists(dir + "/clusters_static_markerset.json"));  // the set placed by the walk's motion
   EXPECT_EQ(app::load_marker_set(dir + "/clusters_static_markerset.json").entries.size(), 53u);
   EXPECT_TRUE(summary["unobserved"].is_null()) << summary["unobserved"].dump();
