@@ -22,7 +22,7 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
                                     const SubjectSettings& settings, const SampleSet& samples,
                                     const std::string& name) {
   CalibratedSubject result;
-  result.choice = settings.set ? MarkerSetChoice{*settings.set, "given"}
+  result.choice = settings.set ? MarkerSetChoice{*settings.set, "given", {}, {}}
                                : choose_marker_set_for(source.labels(), settings.markerset, "");
   pipeline::SessionOptions options;
   options.height_mm = settings.height_mm;
