@@ -10,11 +10,11 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/body/non_marker_points.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/marker_sequence.hpp>
-#include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/markerset/marker_set_inference.hpp>
 
 #include <cmath>

@@ -8,7 +8,6 @@
 
 namespace s2kf::markerset {
 
-
 S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recording,
                                                    const body::MarkerSet& known, const SampleSet& samples,
                                                    const MarkerSetInferenceOptions& options) {

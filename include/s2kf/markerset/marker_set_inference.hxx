@@ -1,6 +1,6 @@
 /// @file
-/// The definitions of <s2kf/markerset/marker_set_inference.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/markerset/marker_set_inference.hpp>: inline where the library is used
+/// header-only, compiled once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/markerset/marker_set_inference.hpp>
