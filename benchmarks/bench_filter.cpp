@@ -8,8 +8,8 @@
 //   build/benchmarks/bench_filter --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <s2kf/core/bordered_cholesky.hpp>
 #include <s2kf/core/product_tiles.hpp>
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
+#include <s2kf/io/sample_cache.hpp>
 
 #include <benchmark/benchmark.h>
 #include <Eigen/Cholesky>

@@ -8,13 +8,13 @@
 #pragma once
 
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
 #include <s2kf/core/product_tiles.hpp>
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 #include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/calibration/height_estimate.hpp>
-#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <benchmark/benchmark.h>

@@ -1,16 +1,17 @@
-// The tuning driver behind the motion-model and calibration-prior choices in docs/tracking.md and docs/notes/: one
-// simulated realistic subject and motion, tracked as `s2kf track` tracks it (marker set chosen from
-// the labels, calibration unless 0), with the tracker's motion model and noise levels given on the
-// command line; prints the accuracy against the truth after 20 frames (and the true-subject
-// reference when asked). Not built by CMake; build it from the repository root with
+// The tuning driver behind the motion-model and calibration-prior choices in docs/tracking.md and
+// docs/notes/: one simulated realistic subject and motion, tracked as `s2kf track` tracks it (marker set
+// chosen from the labels, calibration unless 0), with the tracker's motion model and noise levels given on
+// the command line; prints the accuracy against the truth after 20 frames (and the true-subject reference
+// when asked). Not built by CMake; build it from the repository root with
 //   g++ -O2 -DNDEBUG -std=c++17 -Iinclude -isystem /usr/include/eigen3 \
-//     -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp src/app/sample_sets.cpp src/app/marker_set_json.cpp \
-//     src/app/data_directory.cpp -o accuracy-tune
+//     -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp src/app/sample_sets.cpp
+//     src/app/marker_set_json.cpp \ src/app/data_directory.cpp -o accuracy-tune
 // or, faster, against the compiled library (`cmake --build build --target s2kf_compiled`; the same
 // -march=native as that library, or Eigen's objects differ in layout and the program crashes):
 //   g++ -O2 -march=native -DNDEBUG -std=c++17 -DS2KF_COMPILED -Iinclude \
 //     -isystem /usr/include/eigen3 -DS2KF_DATA_DIR="\"$PWD/data\"" scripts/accuracy-tune.cpp \
-//     src/app/sample_sets.cpp src/app/marker_set_json.cpp src/app/data_directory.cpp build/libs2kf_compiled.a -lpthread -o build/accuracy-tune
+//     src/app/sample_sets.cpp src/app/marker_set_json.cpp src/app/data_directory.cpp build/libs2kf_compiled.a
+//     -lpthread -o build/accuracy-tune
 // Usage: accuracy-tune MOTION SEED OCCLUSION(0|1) SMOOTH(0|1) CALIBRATE(0|1) rw|cv
 //          [POSITION_ACC ORIENTATION_ACC JOINT_ACC POSITION_SPEED ORIENTATION_SPEED JOINT_SPEED
 //           REFERENCE(0|1) [INITIAL_RATE_SDS x3]]
@@ -24,16 +25,16 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
-#include <s2kf/body/marker_set.hpp>
-#include <s2kf/io/frame_source.hpp>
-#include <s2kf/sim/recording.hpp>
-#include <s2kf/pipeline/session.hpp>
-#include <s2kf/evaluation/true_subject_reference.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
-#include <string>
 #include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/motion_json.hpp>
 #include <s2kf/app/sample_sets.hpp>
+#include <s2kf/body/marker_set.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
+#include <s2kf/io/frame_source.hpp>
+#include <s2kf/pipeline/session.hpp>
+#include <s2kf/sim/recording.hpp>
+#include <string>
 using namespace s2kf;
 int main(int argc, char** argv) {
   // usage: tune motion seed occlusion(0/1) smooth(0/1) calibrate(0/1) model(rw/cv) pa oa ja ps os js ref(0/1)
@@ -92,7 +93,8 @@ int main(int argc, char** argv) {
               t.root_orientation_rms_deg, t.joint_limit_violations,
               track::mean_from(run.mean_marker_distance, 20), 1000 * s[s.size() / 2]);
   if (ref) {
-    const auto r = evaluation::compare_with_truth(session.model, evaluation::true_subject_fit(subject, rec), truth, 20);
+    const auto r =
+        evaluation::compare_with_truth(session.model, evaluation::true_subject_fit(subject, rec), truth, 20);
     std::printf(" | ref seg %.2f flex %.2f root %.2f", r.segment_orientation_rms_deg, r.limb_flexion_rms_deg,
                 r.root_orientation_rms_deg);
   }

@@ -4,16 +4,16 @@
 /// command's tests compare the program with.
 #pragma once
 
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/calibration/height_estimate.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "tracker_samples.hpp"
 
@@ -79,8 +79,8 @@ inline Tracked track_recording(const c3d::Recording& recording, const io::Motion
                                Eigen::Index frames = 0, track::TrackerOptions options = {}) {
   const body::BodyModel model = body::mmm_body_model(1000);
   SequenceFrameSource source(recording);
-  const auto height =
-      calibration::estimate_height(source, model, body::map_markers(labels_of(recording), model.marker_names()));
+  const auto height = calibration::estimate_height(
+      source, model, body::map_markers(labels_of(recording), model.marker_names()));
   return track_with_model(recording, truth, model.scaled(height ? height->mm : 1750), frames, options);
 }
 
@@ -92,7 +92,7 @@ inline pipeline::Session evaluation_session(const MarkerSequence& recording, dou
   options.height_mm = height_mm;
   options.calibrate = false;
   return pipeline::prepare_session(source, body::model_marker_set(body::mmm_body_model(1000)), options,
-                                test::tracker_samples());
+                                   test::tracker_samples());
 }
 
 }  // namespace s2kf::test_support

@@ -1,12 +1,12 @@
 // `s2kf calibrate`: estimate a subject (body height, bone lengths, where each marker sits) from a
 // recording of that subject, and write it as a marker-set file `s2kf track --subject` loads.
 #include <s2kf/app/calibrated_subject.hpp>
-#include "command.hpp"
-#include "output_options.hpp"
 #include <s2kf/app/extra_outputs.hpp>
 #include <s2kf/app/marker_set_json.hpp>
-#include <s2kf/app/track_summary.hpp>  // fixed_text
 #include <s2kf/app/sample_sets.hpp>
+#include <s2kf/app/track_summary.hpp>  // fixed_text
+#include "command.hpp"
+#include "output_options.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/io/atomic_file.hpp>

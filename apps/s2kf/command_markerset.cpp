@@ -1,7 +1,7 @@
 // `s2kf markerset infer REC.c3d --out SET.json`: a marker set inferred from a recording whose labels
 // no bundled set names (track/marker_set_inference.hpp), written for a person to read and correct.
-#include "command.hpp"
 #include <s2kf/app/inferred_marker_set.hpp>
+#include "command.hpp"
 
 #include <iomanip>
 #include <iostream>

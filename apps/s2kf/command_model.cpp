@@ -1,6 +1,6 @@
 // s2kf model: the body model's marker positions (zero pose or a given pose) or its joint table, as CSV.
-#include "command.hpp"
 #include <s2kf/app/marker_set_json.hpp>
+#include "command.hpp"
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>

@@ -2,8 +2,8 @@
 // prints a summary or one JSON object, and optionally writes the points as CSV.
 #include "command.hpp"
 
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/io/atomic_file.hpp>
+#include <s2kf/io/sample_cache.hpp>
 
 #include <nlohmann/json.hpp>
 

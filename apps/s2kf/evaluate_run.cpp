@@ -5,24 +5,24 @@
 #include "evaluation_inputs.hpp"
 
 #include <s2kf/app/bundled_motions.hpp>
-#include "command.hpp"
-#include "evaluation_files.hpp"
 #include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/motion_json.hpp>
-#include <s2kf/app/track_summary.hpp>
 #include <s2kf/app/sample_sets.hpp>
+#include <s2kf/app/track_summary.hpp>
+#include "command.hpp"
+#include "evaluation_files.hpp"
 
+#include <s2kf/evaluation/evaluation.hpp>
+#include <s2kf/evaluation/hidden_time_error.hpp>
+#include <s2kf/evaluation/identifiable_subject_reference.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/evaluation/evaluation.hpp>
-#include <s2kf/evaluation/hidden_time_error.hpp>
-#include <s2kf/evaluation/identifiable_subject_reference.hpp>
-#include <s2kf/pipeline/session.hpp>
-#include <s2kf/evaluation/true_subject_reference.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -176,8 +176,8 @@ void run_evaluate(const EvaluateSettings& settings) {
     options.noise_from_calibration = settings.noise_from_calibration;
     options.tracker.motion_model = track::motion_model_from_name(settings.motion_model);
     track::set_gain_from_name(options.tracker, settings.gain);
-    setup =
-        pipeline::prepare_session(source, choice.set, options, cached_sample_set(46, options.tracker.samples));
+    setup = pipeline::prepare_session(source, choice.set, options,
+                                      cached_sample_set(46, options.tracker.samples));
   } catch (const std::invalid_argument& e) {
     throw UserError(recording_path + ": " + e.what());
   }
@@ -206,8 +206,8 @@ void run_evaluate(const EvaluateSettings& settings) {
   // The sample-count sweep; the run at the default L is the S2KF of the comparison.
   std::vector<evaluation::MethodResult> sweep;
   for (int samples : sample_counts) {
-    sweep.push_back(
-        evaluation::evaluate_method(setup, complete, pipeline::Method::s2kf, samples, truth_ptr, settings.warmup));
+    sweep.push_back(evaluation::evaluate_method(setup, complete, pipeline::Method::s2kf, samples, truth_ptr,
+                                                settings.warmup));
     say("S2KF with L = " + std::to_string(samples) + ": " + cell(sweep.back().level_mm) + " mm, median " +
         cell(sweep.back().median_ms) + " ms per frame");
   }
@@ -227,7 +227,7 @@ void run_evaluate(const EvaluateSettings& settings) {
   json error_by_time_hidden = nullptr;
   const auto hidden_time = [&](const io::MotionTable& motion) {
     return hidden_time_json(evaluation::hidden_time_error(setup.model, motion, *truth, complete.visible,
-                                                     setup.mapping, setup.rate_hz, settings.warmup));
+                                                          setup.mapping, setup.rate_hz, settings.warmup));
   };
   if (truth) error_by_time_hidden = {{"s2kf", hidden_time(s2kf.run.motion)}};
   // The RTS-smoothed motion of a session over the whole recording.
@@ -239,9 +239,9 @@ void run_evaluate(const EvaluateSettings& settings) {
         .motion;
   };
   if (simulated) {
-    reference = evaluation::compare_with_truth(setup.model,
-                                          evaluation::true_subject_fit(simulated->subject, simulated->recording),
-                                          *truth, settings.warmup);
+    reference = evaluation::compare_with_truth(
+        setup.model, evaluation::true_subject_fit(simulated->subject, simulated->recording), *truth,
+        settings.warmup);
     say("true-subject fit: segment orientation RMS " + cell(reference->segment_orientation_rms_deg) + " deg");
     identifiable = identifiable_references(setup, *simulated, *truth, settings.warmup);
     constant_placement = constant_placement_reference(setup, *simulated, *truth, settings.warmup);
@@ -256,9 +256,9 @@ void run_evaluate(const EvaluateSettings& settings) {
     if (setup.model.marker_names() == simulated->subject.model.marker_names()) {
       sim::Subject tracked_subject = simulated->subject;
       tracked_subject.model = setup.model;
-      model_fit = evaluation::compare_with_truth(setup.model,
-                                            evaluation::true_subject_fit(tracked_subject, simulated->recording),
-                                            *truth, settings.warmup);
+      model_fit = evaluation::compare_with_truth(
+          setup.model, evaluation::true_subject_fit(tracked_subject, simulated->recording), *truth,
+          settings.warmup);
       say("tracker-model fit: segment orientation RMS " + cell(model_fit->segment_orientation_rms_deg) +
           " deg");
       // The tracker itself with the subject the simulation drew: what a perfect calibration would
@@ -269,8 +269,8 @@ void run_evaluate(const EvaluateSettings& settings) {
           true_setup, complete, pipeline::Method::s2kf, main_samples, truth_ptr, settings.warmup);
       true_subject_tracking = {{"s2kf", truth_json(*with_true_subject.truth)}};
       if (settings.smooth)
-        true_subject_tracking["s2kf_smoothed"] = truth_json(
-            evaluation::compare_with_truth(setup.model, smoothed_motion(true_setup), *truth, settings.warmup));
+        true_subject_tracking["s2kf_smoothed"] = truth_json(evaluation::compare_with_truth(
+            setup.model, smoothed_motion(true_setup), *truth, settings.warmup));
       say("S2KF with the true subject: segment orientation RMS " +
           cell(true_subject_tracking["s2kf"]["segment_orientation_rms_deg"].get<double>()) + " deg");
     }

@@ -2,24 +2,24 @@
 #include "evaluation_inputs.hpp"
 
 #include <s2kf/app/bundled_motions.hpp>
-#include "command.hpp"
-#include "evaluation_files.hpp"
 #include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/motion_json.hpp>
-#include <s2kf/app/track_summary.hpp>
 #include <s2kf/app/sample_sets.hpp>
+#include <s2kf/app/track_summary.hpp>
+#include "command.hpp"
+#include "evaluation_files.hpp"
 
+#include <s2kf/evaluation/evaluation.hpp>
+#include <s2kf/evaluation/hidden_time_error.hpp>
+#include <s2kf/evaluation/identifiable_subject_reference.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/evaluation/evaluation.hpp>
-#include <s2kf/evaluation/hidden_time_error.hpp>
-#include <s2kf/evaluation/identifiable_subject_reference.hpp>
-#include <s2kf/pipeline/session.hpp>
-#include <s2kf/evaluation/true_subject_reference.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -77,7 +77,7 @@ DefaultCalibration default_calibration(const pipeline::Session& setup, const Sim
   c.options.marker_weight = pipeline::calibration_weights(setup.marker_set, setup.tracker.marker_noise_mm);
   c.frames = evaluation::calibration_frame_indices(
       pipeline::calibration_stretches(simulated.recording.frames(), defaults.calibration_frames,
-                                   defaults.calibration_windows),
+                                      defaults.calibration_windows),
       c.options);
   // The model the calibration starts from (prepare_session's, before the calibration).
   c.nominal =
@@ -88,11 +88,11 @@ DefaultCalibration default_calibration(const pipeline::Session& setup, const Sim
 
 /// The true-subject fit with `model` in place of the subject's, against the truth.
 evaluation::TruthComparison fit_with(const body::BodyModel& model, const pipeline::Session& setup,
-                                const Simulated& simulated, const io::MotionTable& truth, long warmup) {
+                                     const Simulated& simulated, const io::MotionTable& truth, long warmup) {
   sim::Subject subject = simulated.subject;
   subject.model = model;
-  return evaluation::compare_with_truth(setup.model, evaluation::true_subject_fit(subject, simulated.recording), truth,
-                                   warmup);
+  return evaluation::compare_with_truth(
+      setup.model, evaluation::true_subject_fit(subject, simulated.recording), truth, warmup);
 }
 
 bool same_markers(const pipeline::Session& setup, const Simulated& simulated) {
@@ -120,8 +120,9 @@ json identifiable_references(const pipeline::Session& setup, const Simulated& si
   for (const double fraction : {1e-5, 0.03, std::numeric_limits<double>::infinity()}) {
     evaluation::IdentifiableSubject identifiable;
     try {
-      identifiable = evaluation::identifiable_subject(c.nominal, simulated.subject, simulated.recording, c.frames,
-                                                 c.options, setup.tracker.marker_noise_mm, fraction);
+      identifiable =
+          evaluation::identifiable_subject(c.nominal, simulated.subject, simulated.recording, c.frames,
+                                           c.options, setup.tracker.marker_noise_mm, fraction);
     } catch (const std::invalid_argument&) {
       return json::array();  // no calibration frame to form the information from
     }
@@ -141,7 +142,7 @@ json constant_placement_reference(const pipeline::Session& setup, const Simulate
     constexpr double kExactGauges = 1e-5;
     const evaluation::IdentifiableSubject identifiable =
         evaluation::identifiable_subject(c.nominal, constant, simulated.recording, c.frames, c.options,
-                                    setup.tracker.marker_noise_mm, kExactGauges);
+                                         setup.tracker.marker_noise_mm, kExactGauges);
     reference["identifiable"] = identifiable_json(
         identifiable, kExactGauges, fit_with(identifiable.model, setup, simulated, truth, warmup));
   }

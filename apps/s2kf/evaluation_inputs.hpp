@@ -6,9 +6,9 @@
 #include "evaluate_run.hpp"
 
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/pipeline/session.hpp>
 
 #include <nlohmann/json.hpp>
 

@@ -8,8 +8,8 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
-#include <s2kf/io/atomic_file.hpp>
 #include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/io/atomic_file.hpp>
 
 #include <Eigen/Core>
 

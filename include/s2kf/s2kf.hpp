@@ -31,8 +31,8 @@
 #include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/body/non_marker_points.hpp>
 #include <s2kf/body/pose.hpp>
-#include <s2kf/body/reference_poses.hpp>
 #include <s2kf/body/pose_columns.hpp>
+#include <s2kf/body/reference_poses.hpp>
 #include <s2kf/body/segment_inertia.hpp>
 #include <s2kf/body/vector_sincos.hpp>
 

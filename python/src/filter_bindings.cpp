@@ -6,9 +6,9 @@
 #include "bindings.hpp"
 #include "numpy_bridge.hpp"
 
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
+#include <s2kf/io/sample_cache.hpp>
 
 #include <pybind11/stl.h>
 

@@ -7,8 +7,8 @@
 #include "numpy_bridge.hpp"
 
 #include <s2kf/body/body_model.hpp>
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 

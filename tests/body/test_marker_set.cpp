@@ -5,8 +5,8 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
-#include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/io/c3d_reader.hpp>
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
 // Label normalisation: labs spell the same marker differently (case, separators, Left/Right,
 // numbered clusters, subject prefixes with or without a separator); each spelling must find its
 // marker, and nothing that is not the same marker may.
+#include <s2kf/body/label_text.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/marker_set_labels.hpp>
-#include <s2kf/body/label_text.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
 
 #include <s2kf/app/marker_set_json.hpp>

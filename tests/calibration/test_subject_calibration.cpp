@@ -3,15 +3,15 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/core/constants.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/calibration/height_estimate.hpp>
-#include <s2kf/body/marker_set_mapping.hpp>
-#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "sweep_recording.hpp"
 #include "tracker_samples.hpp"
@@ -138,13 +138,13 @@ track::TrackerOptions fast_options() {
 /// weak-direction shrinkage) and no final tracking pass (the tests compare against the truth
 /// instead).
 calibration::SubjectCalibration calibrate(const body::BodyModel& model, const Synthetic& s,
-                                    std::optional<double> shrink = std::nullopt) {
+                                          std::optional<double> shrink = std::nullopt) {
   calibration::CalibrationOptions options;
   options.final_pass = false;
   if (shrink) options.weak_direction_shrink = *shrink;
   return calibration::calibrate_subject(model, body::map_markers(s.recording.labels, model.marker_names()),
-                                  fast_options(), s.recording, test::tracker_samples(fast_options()),
-                                  options);
+                                        fast_options(), s.recording, test::tracker_samples(fast_options()),
+                                        options);
 }
 
 io::MotionTable track_all(const body::BodyModel& model, const Synthetic& s,
@@ -277,8 +277,9 @@ TEST(SubjectCalibration, AdjustsTheSubjectAtGivenPoses) {
 
   // Poses it cannot use are refused with a sentence.
   std::vector<std::pair<long, body::Pose>> outside{{s.recording.frames(), s.recording.truth.front()}};
-  EXPECT_THROW(calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, outside, options),
-               std::invalid_argument);
+  EXPECT_THROW(
+      calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, outside, options),
+      std::invalid_argument);
   std::vector<std::pair<long, body::Pose>> short_pose{{0, s.recording.truth.front()}};
   short_pose[0].second.joints.resize(3);
   EXPECT_THROW(
@@ -321,7 +322,7 @@ TEST(SubjectCalibration, AStaticTrialFixesTheGauges) {
     calibration::CalibrationOptions o = options;
     o.static_pose_sd_rad = sd_rad;
     return calibration::calibrate_subject(model, mapping, fast_options(), recording,
-                                    test::tracker_samples(fast_options()), o)
+                                          test::tracker_samples(fast_options()), o)
         .model;
   };
   const double before = offset_error(model, subject, false);
@@ -367,8 +368,8 @@ TEST(SubjectCalibration, WeakDirectionShrinkageKeepsTheShareMuOverMuPlusC) {
     options.final_pass = false;
     options.weak_direction_shrink = c;
     return calibration::calibrate_subject(model, body::map_markers(recording.labels, model.marker_names()),
-                                    fast_options(), recording, test::tracker_samples(fast_options()),
-                                    options);
+                                          fast_options(), recording, test::tracker_samples(fast_options()),
+                                          options);
   };
   const auto fraction_moved = [&](const calibration::SubjectCalibration& calibration) {
     const Eigen::Vector3d step = calibration.model.markers[static_cast<std::size_t>(moved)].offset -
@@ -485,7 +486,7 @@ TEST(SubjectCalibration, ResultDoesNotDependOnTheThreadCount) {
   EXPECT_GT(moved, 1.0);
   options.threads = 0;
   EXPECT_THROW(calibration::calibrate_subject(model, mapping, fast_options(), s.recording,
-                                        test::tracker_samples(fast_options()), options),
+                                              test::tracker_samples(fast_options()), options),
                std::invalid_argument);
 }
 

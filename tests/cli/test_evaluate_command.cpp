@@ -4,20 +4,20 @@
 // Sizes are small on purpose (60 frames, L = 93, 2 runs): the suite also runs under sanitizers.
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/evaluation/evaluation.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/evaluation/evaluation.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/evaluation/true_subject_reference.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/motion_json.hpp>
@@ -90,7 +90,8 @@ TEST(EvaluateCommand, ShortRunWritesTheResultsFolder) {
   // The numbers are the library's for the same input.
   const MarkerSequence recording = bundled_handstand(60);
   const pipeline::Session setup = evaluation_session(recording);
-  const io::MotionTable truth = evaluation::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
+  const io::MotionTable truth =
+      evaluation::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
   const evaluation::MethodResult s2kf =
       evaluation::evaluate_method(setup, recording, pipeline::Method::s2kf, 93, &truth, 20);
   const evaluation::MethodResult baseline =
@@ -165,7 +166,7 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
       app::load_motion_file(data_file("motions/walk.json"), joints, 2), subject, recording_options, 2);
   const evaluation::TruthComparison expected =
       evaluation::compare_with_truth(subject.model, evaluation::true_subject_fit(subject, recording),
-                                sim::truth_motion(recording, subject.joint_names), 20);
+                                     sim::truth_motion(recording, subject.joint_names), 20);
   const double reference = json_number(summary, "segment_orientation_rms_deg", "true_subject_reference");
   EXPECT_NEAR(reference, expected.segment_orientation_rms_deg, 1e-6);
   EXPECT_GT(reference, 0.1);
@@ -188,7 +189,8 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
   // The best constant placement: the library's, on the same subject and recording; and its
   // identifiable part, whose gauges go back to the marker set's, is no better.
   const evaluation::TruthComparison constant = evaluation::compare_with_truth(
-      subject.model, evaluation::true_subject_fit(evaluation::best_constant_placement(subject, recording), recording),
+      subject.model,
+      evaluation::true_subject_fit(evaluation::best_constant_placement(subject, recording), recording),
       sim::truth_motion(recording, subject.joint_names), 20);
   const nlohmann::json& placement = parsed["constant_placement_reference"];
   EXPECT_NEAR(placement["truth"]["segment_orientation_rms_deg"].get<double>(),
@@ -212,7 +214,7 @@ TEST(EvaluateCommand, SimulatedMotionReportsTheTrueSubjectReference) {
     pipeline::SessionOptions session_options;
     session_options.calibrate = false;
     session = pipeline::prepare_session(source, app::choose_marker_set_for(recording.labels, "", "").set,
-                                     session_options, test::tracker_samples());
+                                        session_options, test::tracker_samples());
   }
   session.model = subject.model;
   const io::MotionTable true_motion = sim::truth_motion(recording, subject.joint_names);

@@ -1,7 +1,7 @@
 // A nonlinear transformation where more, optimally placed samples pay off: polar to Cartesian
 // coordinates with a wide bearing uncertainty, against the closed-form moments.
-#include <s2kf/io/sample_cache.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
+#include <s2kf/io/sample_cache.hpp>
 
 #include <gtest/gtest.h>
 

@@ -4,18 +4,18 @@
 // Sizes are small on purpose (60 frames, L = 93, 2 runs): the suite also runs under sanitizers.
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/evaluation/evaluation.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/evaluation/evaluation.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/evaluation/true_subject_reference.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <s2kf/app/motion_json.hpp>
 #include "test_files.hpp"
@@ -178,7 +178,8 @@ TEST(GradientBaseline, StaysOnTheLimitWhenTheMarkersAskForMore) {
 TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
   const MarkerSequence recording = bundled_handstand(60);
   const pipeline::Session setup = evaluation_session(recording);
-  const io::MotionTable truth = evaluation::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
+  const io::MotionTable truth =
+      evaluation::first_rows(io::load_motion_csv(data_file("handstand_truth.csv")), 60);
   evaluation::check_truth(truth, setup, 60);
   const evaluation::MethodResult s2kf =
       evaluation::evaluate_method(setup, recording, pipeline::Method::s2kf, 93, &truth, 20);
@@ -215,7 +216,8 @@ TEST(Evaluation, MethodsAgreeWithTheirOwnTrackingRuns) {
       track::converged_frame(by_hand.mean_marker_distance, track::frames_per_second(recording.rate_hz));
   EXPECT_EQ(s2kf.converged_frame, converged);
   EXPECT_DOUBLE_EQ(s2kf.level_mm, track::mean_from(by_hand.mean_marker_distance, converged));
-  const evaluation::TruthComparison direct = evaluation::compare_with_truth(setup.model, by_hand.motion, truth, 20);
+  const evaluation::TruthComparison direct =
+      evaluation::compare_with_truth(setup.model, by_hand.motion, truth, 20);
   ASSERT_TRUE(s2kf.truth.has_value());
   EXPECT_DOUBLE_EQ(s2kf.truth->segment_orientation_rms_deg, direct.segment_orientation_rms_deg);
   EXPECT_EQ(s2kf.truth->frames, 40);

@@ -1,10 +1,10 @@
 // The error against the time a segment's markers have been hidden: bins counted by hand and RMS
 // values in closed form on a motion whose error is known exactly.
 #include <s2kf/body/body_model.hpp>
-#include <s2kf/core/constants.hpp>
-#include <s2kf/io/motion_files.hpp>
-#include <s2kf/evaluation/hidden_time_error.hpp>
 #include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/core/constants.hpp>
+#include <s2kf/evaluation/hidden_time_error.hpp>
+#include <s2kf/io/motion_files.hpp>
 
 #include <gtest/gtest.h>
 
@@ -52,7 +52,8 @@ struct Fixture {
   }
 };
 
-const evaluation::SegmentHiddenTimeError& segment(const evaluation::HiddenTimeError& e, const std::string& name) {
+const evaluation::SegmentHiddenTimeError& segment(const evaluation::HiddenTimeError& e,
+                                                  const std::string& name) {
   for (const auto& s : e.segments)
     if (s.segment == name) return s;
   throw std::runtime_error("no segment " + name);
@@ -120,12 +121,14 @@ TEST(HiddenTimeError, RejectsInputsThatDoNotFit) {
   short_mapping.point_of_marker.pop_back();
   EXPECT_THROW(evaluation::hidden_time_error(s.model, truth, truth, s.visible, short_mapping, kRate, 0),
                std::invalid_argument);
-  EXPECT_THROW(evaluation::hidden_time_error(s.model, truth, truth, s.visible.topRows(3), s.mapping, kRate, 0),
-               std::invalid_argument);
+  EXPECT_THROW(
+      evaluation::hidden_time_error(s.model, truth, truth, s.visible.topRows(3), s.mapping, kRate, 0),
+      std::invalid_argument);
   EXPECT_THROW(evaluation::hidden_time_error(s.model, truth, truth, s.visible, s.mapping, 0, 0),
                std::invalid_argument);
-  EXPECT_THROW(evaluation::hidden_time_error(s.model, truth, truth, s.visible, s.mapping, kRate, 0, {0.5, 0.2}),
-               std::invalid_argument);
+  EXPECT_THROW(
+      evaluation::hidden_time_error(s.model, truth, truth, s.visible, s.mapping, kRate, 0, {0.5, 0.2}),
+      std::invalid_argument);
   io::MotionTable other = truth;
   other.joint_names.back() = "XX";
   EXPECT_THROW(evaluation::hidden_time_error(s.model, other, truth, s.visible, s.mapping, kRate, 0),

@@ -5,11 +5,11 @@
 // seen by the data while the knee bends) must stay the true subject's.
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/evaluation/identifiable_subject_reference.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/evaluation/identifiable_subject_reference.hpp>
-#include <s2kf/evaluation/true_subject_reference.hpp>
 
 #include <Eigen/Geometry>
 
@@ -145,11 +145,12 @@ TEST(IdentifiableSubjectReference, RefusesAnotherModelOrBadFrames) {
   EXPECT_THROW(
       evaluation::identifiable_subject(other, c.subject, c.recording, c.frames, {}, kNoiseMm, kExactGauges),
       std::invalid_argument);
-  EXPECT_THROW(
-      evaluation::identifiable_subject(c.subject.model, c.subject, c.recording, {400}, {}, kNoiseMm, kExactGauges),
-      std::invalid_argument);
-  EXPECT_THROW(evaluation::identifiable_subject(c.subject.model, c.subject, c.recording, c.frames, {}, 0, 1e-3),
+  EXPECT_THROW(evaluation::identifiable_subject(c.subject.model, c.subject, c.recording, {400}, {}, kNoiseMm,
+                                                kExactGauges),
                std::invalid_argument);
+  EXPECT_THROW(
+      evaluation::identifiable_subject(c.subject.model, c.subject, c.recording, c.frames, {}, 0, 1e-3),
+      std::invalid_argument);
 }
 
 TEST(IdentifiableSubjectReference, CalibrationFramesFollowTheStretches) {

@@ -3,11 +3,11 @@
 // noise it is off by a little, and far less than a fit with the nominal model.
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/evaluation/true_subject_reference.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/evaluation/true_subject_reference.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <gtest/gtest.h>
 
@@ -50,13 +50,13 @@ TEST(TrueSubjectReference, RecoversTheTruthWhenOnlyTheSubjectDiffersFromTheModel
 TEST(TrueSubjectReference, IsBetterThanTheNominalModelOnARealisticSubject) {
   const Case c = simulate(sim::SubjectOptions{});
   const io::MotionTable truth = sim::truth_motion(c.recording, c.subject.joint_names);
-  const evaluation::TruthComparison reference =
-      evaluation::compare_with_truth(c.subject.model, evaluation::true_subject_fit(c.subject, c.recording), truth, 0);
+  const evaluation::TruthComparison reference = evaluation::compare_with_truth(
+      c.subject.model, evaluation::true_subject_fit(c.subject, c.recording), truth, 0);
   // The same fit with the nominal model of the subject's height.
   sim::Subject nominal = c.subject;
   nominal.model = body::mmm_body_model(1000).scaled(c.subject.height_mm);
-  const evaluation::TruthComparison plain =
-      evaluation::compare_with_truth(c.subject.model, evaluation::true_subject_fit(nominal, c.recording), truth, 0);
+  const evaluation::TruthComparison plain = evaluation::compare_with_truth(
+      c.subject.model, evaluation::true_subject_fit(nominal, c.recording), truth, 0);
   EXPECT_GT(reference.segment_orientation_rms_deg, 0.1);  // soft tissue and noise remain
   EXPECT_LT(reference.segment_orientation_rms_deg, 6.0);
   EXPECT_LT(reference.segment_orientation_rms_deg, 0.8 * plain.segment_orientation_rms_deg);
@@ -109,11 +109,12 @@ TEST(BestConstantPlacement, FitsARealisticSubjectBetterThanItsTruePlacement) {
   // per-frame fit is closer to the true motion than with the placement alone.
   const Case c = simulate(sim::SubjectOptions{});
   const io::MotionTable truth = sim::truth_motion(c.recording, c.subject.joint_names);
-  const evaluation::TruthComparison placement =
-      evaluation::compare_with_truth(c.subject.model, evaluation::true_subject_fit(c.subject, c.recording), truth, 0);
+  const evaluation::TruthComparison placement = evaluation::compare_with_truth(
+      c.subject.model, evaluation::true_subject_fit(c.subject, c.recording), truth, 0);
   const evaluation::TruthComparison constant = evaluation::compare_with_truth(
       c.subject.model,
-      evaluation::true_subject_fit(evaluation::best_constant_placement(c.subject, c.recording), c.recording), truth, 0);
+      evaluation::true_subject_fit(evaluation::best_constant_placement(c.subject, c.recording), c.recording),
+      truth, 0);
   EXPECT_GT(constant.segment_orientation_rms_deg, 0.1);  // the soft tissue's changes remain
   EXPECT_LT(constant.segment_orientation_rms_deg, placement.segment_orientation_rms_deg);
 }

@@ -10,18 +10,18 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/core/constants.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/markerset/marker_set_inference.hpp>
-#include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/markerset/rigid_clusters.hpp>
 #include <s2kf/markerset/segment_rigidity.hpp>
 #include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <gtest/gtest.h>
 

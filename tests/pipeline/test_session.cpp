@@ -105,8 +105,9 @@ TEST(Session, UnitsProblemComparesTheRigidPairsWithTheHeight) {
   EXPECT_EQ(calibration::units_problem(1700, 1700, "estimated from 12 rigid marker pairs"), "");
   EXPECT_NE(calibration::units_problem(1.7, 1.7, "estimated from 12 rigid marker pairs").find("in metres"),
             std::string::npos);
-  EXPECT_NE(calibration::units_problem(170, 170, "estimated from 3 rigid marker pairs").find("in centimetres"),
-            std::string::npos);
+  EXPECT_NE(
+      calibration::units_problem(170, 170, "estimated from 3 rigid marker pairs").find("in centimetres"),
+      std::string::npos);
   // A given height: the pairs must agree within a factor of 2 (a child, a mis-scaled set pass).
   EXPECT_EQ(calibration::units_problem(1300, 1750, "given"), "");
   EXPECT_NE(calibration::units_problem(1.75, 1750, "given").find("but the height given is 1750 mm"),

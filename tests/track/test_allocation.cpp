@@ -4,9 +4,9 @@
 // Under AddressSanitizer the allocator belongs to the sanitizer, so only operator new is replaced
 // (and counted) there, as tests/body does; the full malloc count runs in the ordinary builds.
 #include <s2kf/body/forward_kinematics.hpp>
-#include <s2kf/io/c3d_reader.hpp>
-#include <s2kf/calibration/height_estimate.hpp>
 #include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include "tracker_samples.hpp"

@@ -8,13 +8,13 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/frame_source.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
 #include <s2kf/track/segment_observation.hpp>
-#include <s2kf/pipeline/session.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "tracker_samples.hpp"
 

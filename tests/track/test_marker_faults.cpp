@@ -6,11 +6,11 @@
 #include "tracker_samples.hpp"
 
 #include <s2kf/core/constants.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/pipeline/session.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <gtest/gtest.h>
 

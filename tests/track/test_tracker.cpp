@@ -4,18 +4,18 @@
 // Thresholds: measured on the bundled recordings (docs/tracking.md gives the numbers), with about
 // 30 % margin for a change of seed or sample set; a wrong formula (a sign, an axis order, a missing
 // re-centring) moves these errors by far more.
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/bvh.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/c3d_writer.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/io/motion_stream_writer.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/calibration/height_estimate.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <nlohmann/json.hpp>
 

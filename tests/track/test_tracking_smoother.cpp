@@ -2,14 +2,14 @@
 // joints always inside their limits, through a cartwheel where roll-pitch-yaw is singular.
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/calibration/height_estimate.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracking_run.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include "tracked_recording.hpp"
 #include "tracker_samples.hpp"

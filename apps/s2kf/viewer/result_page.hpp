@@ -9,10 +9,10 @@
 #include "page_writer.hpp"
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 
 #include <nlohmann/json.hpp>
 

@@ -144,9 +144,10 @@ inline void write_model_outputs(io::MotionStreamWriter& motion_files, const Outp
 
 /// The OpenSim model of a calibrated subject (`s2kf calibrate --out SUBJECT.json` writes SUBJECT.osim),
 /// written to its temporary file; the caller commits it with the subject file.
-inline std::unique_ptr<io::AtomicFileWriter> prepare_subject_opensim_model(
-    const std::string& subject_path, const body::BodyModel& model, const body::MarkerMapping& mapping,
-    double body_mass_kg = 0) {
+inline std::unique_ptr<io::AtomicFileWriter> prepare_subject_opensim_model(const std::string& subject_path,
+                                                                           const body::BodyModel& model,
+                                                                           const body::MarkerMapping& mapping,
+                                                                           double body_mass_kg = 0) {
   std::filesystem::path path = subject_path;
   path.replace_extension(".osim");
   auto file = std::make_unique<io::AtomicFileWriter>(path);

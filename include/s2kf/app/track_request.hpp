@@ -47,7 +47,7 @@ struct TrackRequest {
   /// Without a static trial: a stretch of the recording in which the subject stands still in a
   /// reference pose is its static trial, and the recording's calibration starts from it.
   bool static_stretch = true;
-  double height_mm = 0;        ///< 0: the marker set's, else estimated from rigid marker pairs
+  double height_mm = 0;  ///< 0: the marker set's, else estimated from rigid marker pairs
   // The subject's calibration on the recording itself (not with a subject or static trial).
   bool calibrate = true;
   long calibration_frames = 1200;  ///< frames used, in stretches spread over the recording

@@ -5,7 +5,6 @@
 
 #include <s2kf/body/body_model.hpp>
 
-
 namespace s2kf::body {
 
 S2KF_INLINE BodyModel BodyModel::scaled(double new_height_mm) const {

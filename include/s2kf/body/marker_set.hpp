@@ -6,10 +6,10 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/label_text.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
-#include <s2kf/body/label_text.hpp>
 
 #include <Eigen/Core>
 

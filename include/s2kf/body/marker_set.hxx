@@ -5,7 +5,6 @@
 
 #include <s2kf/body/marker_set.hpp>
 
-
 namespace s2kf::body {
 
 S2KF_INLINE void validate_marker_set(const BodyModel& base, const MarkerSet& set) {

@@ -5,9 +5,9 @@
 /// subject "L"). Every rule after the first is reported, so the summary can say what was done.
 #pragma once
 
+#include <s2kf/body/label_text.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/body/label_text.hpp>
 
 #include <algorithm>
 #include <map>

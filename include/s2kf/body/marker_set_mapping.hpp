@@ -3,10 +3,10 @@
 /// choosing, among several sets, the one that fits a recording best.
 #pragma once
 
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/marker_set_labels.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 
 #include <string>
 #include <vector>

@@ -5,7 +5,6 @@
 
 #include <s2kf/body/pose.hpp>
 
-
 namespace s2kf::body {
 
 S2KF_INLINE Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& v) {

@@ -66,7 +66,8 @@ struct BundleFrame {
 
 /// RMS distance (mm) per model marker between the recording and `model` at the frames' poses,
 /// over each frame's listed markers (indices into `used`); NaN for a marker no frame lists.
-inline std::vector<double> marker_residual_rms(const body::BodyModel& model, const body::MarkerMapping& mapping,
+inline std::vector<double> marker_residual_rms(const body::BodyModel& model,
+                                               const body::MarkerMapping& mapping,
                                                const MarkerSequence& recording, const std::vector<int>& used,
                                                const std::vector<BundleFrame>& frames) {
   std::vector<double> sum(static_cast<std::size_t>(model.marker_count()), 0.0);

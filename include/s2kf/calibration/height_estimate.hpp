@@ -5,10 +5,10 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/frame_source.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 
 #include <Eigen/Core>
 
@@ -68,7 +68,8 @@ struct HeightEstimate {
 /// The body height from up to `max_frames` frames spread evenly through the source; nothing when
 /// the mapped markers form no rigid pair.
 std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,
-                                              const body::MarkerMapping& mapping, std::int64_t max_frames = 200);
+                                              const body::MarkerMapping& mapping,
+                                              std::int64_t max_frames = 200);
 
 /// Why the recording's coordinates cannot be a person's in millimetres, or "" when they can. The
 /// rigid marker pairs measure the body whatever the file's POINT:UNITS say: `geometric_mm` is the

@@ -1,10 +1,9 @@
 /// @file
-/// The definitions of <s2kf/calibration/height_estimate.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/calibration/height_estimate.hpp>: inline where the library is used header-only,
+/// compiled once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/calibration/height_estimate.hpp>
-
 
 namespace s2kf::calibration {
 S2KF_INLINE std::optional<HeightEstimate> estimate_height(FrameSource& source, const body::BodyModel& model,

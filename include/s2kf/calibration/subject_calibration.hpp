@@ -9,11 +9,11 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/marker_sequence.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
@@ -190,8 +190,9 @@ struct SubjectCalibration {
 /// bone-length factors and marker offsets. Markers the recording never shows keep their offsets.
 /// Joint limits are not touched, and the adjusted poses stay inside them.
 SubjectCalibration calibrate_subject(const body::BodyModel& model, const body::MarkerMapping& mapping,
-                                     const track::TrackerOptions& tracker_options, const MarkerSequence& recording,
-                                     const SampleSet& samples, const CalibrationOptions& options = {});
+                                     const track::TrackerOptions& tracker_options,
+                                     const MarkerSequence& recording, const SampleSet& samples,
+                                     const CalibrationOptions& options = {});
 
 /// The calibration's bundle adjustment alone, started at given poses instead of a tracking pass's:
 /// adjusts `model` (its bone-length factors and marker offsets, with the priors of `options`)

@@ -1,14 +1,14 @@
 /// @file
-/// The definitions of <s2kf/calibration/subject_calibration.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/calibration/subject_calibration.hpp>: inline where the library is used
+/// header-only, compiled once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
-#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/calibration/bundle_adjustment.hxx>
-
+#include <s2kf/calibration/subject_calibration.hpp>
 
 namespace s2kf::calibration {
-S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model, const body::MarkerMapping& mapping,
+S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
+                                                 const body::MarkerMapping& mapping,
                                                  const track::TrackerOptions& tracker_options,
                                                  const MarkerSequence& recording, const SampleSet& samples,
                                                  const CalibrationOptions& options) {

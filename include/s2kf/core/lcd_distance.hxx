@@ -1,10 +1,9 @@
 /// @file
-/// The definitions of <s2kf/core/lcd_distance.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/core/lcd_distance.hpp>: inline where the library is used header-only, compiled
+/// once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/core/lcd_distance.hpp>
-
 
 namespace s2kf {
 

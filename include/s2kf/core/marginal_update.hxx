@@ -1,10 +1,9 @@
 /// @file
-/// The definitions of <s2kf/core/marginal_update.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/core/marginal_update.hpp>: inline where the library is used header-only, compiled
+/// once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/core/marginal_update.hpp>
-
 
 namespace s2kf {
 S2KF_INLINE bool MarginalUpdate::apply(GaussianXd& joint, const GaussianXd& head_posterior) {

@@ -5,7 +5,6 @@
 
 #include <s2kf/core/sample_set.hpp>
 
-
 namespace s2kf {
 S2KF_INLINE void correct_moments(Eigen::MatrixXd& z) {
   const double count = static_cast<double>(z.cols());

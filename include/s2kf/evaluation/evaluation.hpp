@@ -7,21 +7,21 @@
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/io/sample_cache.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
+#include <s2kf/io/sample_cache.hpp>
+#include <s2kf/pipeline/session.hpp>
 #include <s2kf/sim/occlusion.hpp>
 #include <s2kf/sim/random.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/calibration/height_estimate.hpp>
-#include <s2kf/body/marker_mapping.hpp>
-#include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
 #include <s2kf/track/tracking_run.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <Eigen/Core>
 
@@ -56,31 +56,32 @@ double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const Eigen::Matr
 /// distance is measured against (the input itself, or the complete recording when the input had
 /// markers hidden). on_frame(index) is called after every frame.
 track::TrackingRun track_recording(const pipeline::Session& setup, const MarkerSequence& input,
-                            const MarkerSequence& reference, pipeline::Method method, int samples,
-                            std::vector<double>* distance_to_reference = nullptr,
-                            const std::function<void(long)>& on_frame = {});
+                                   const MarkerSequence& reference, pipeline::Method method, int samples,
+                                   std::vector<double>* distance_to_reference = nullptr,
+                                   const std::function<void(long)>& on_frame = {});
 
 /// One method on one recording, summarised as the paper's evaluation asks (docs/results.md).
 struct MethodResult {
   pipeline::Method method = pipeline::Method::s2kf;
   int samples = 0;  ///< S2KF sample count; 0 for the baseline
   track::TrackingRun run;
-  long converged_frame = -1;  ///< track::converged_frame(): the running median over 1 s below 1.5 x the median
-  double level_mm = 0;        ///< mean marker distance from track::converged_frame on
-  double worst_mm = 0;        ///< largest per-frame mean marker distance from track::converged_frame on
+  long converged_frame =
+      -1;               ///< track::converged_frame(): the running median over 1 s below 1.5 x the median
+  double level_mm = 0;  ///< mean marker distance from track::converged_frame on
+  double worst_mm = 0;  ///< largest per-frame mean marker distance from track::converged_frame on
   long worst_frame = -1;
   double worst_all_frames_mm = 0;                ///< largest per-frame distance over the whole recording
   double median_ms = 0, p99_ms = 0, max_ms = 0;  ///< latency per frame
   std::optional<TruthComparison> truth;          ///< when ground truth was given
 };
 
-MethodResult summarise(pipeline::Method method, int samples, track::TrackingRun run, const pipeline::Session& setup,
-                       const io::MotionTable* truth, long warmup);
+MethodResult summarise(pipeline::Method method, int samples, track::TrackingRun run,
+                       const pipeline::Session& setup, const io::MotionTable* truth, long warmup);
 
 /// Tracks the recording with one method and summarises it; `truth` (optional) must have a row
 /// per frame of the recording with the model's joint columns.
-MethodResult evaluate_method(const pipeline::Session& setup, const MarkerSequence& recording, pipeline::Method method,
-                             int samples, const io::MotionTable* truth, long warmup,
+MethodResult evaluate_method(const pipeline::Session& setup, const MarkerSequence& recording,
+                             pipeline::Method method, int samples, const io::MotionTable* truth, long warmup,
                              const std::function<void(long)>& on_frame = {});
 
 /// Per-frame minimum, maximum and mean over Monte Carlo runs (NaN values skipped).

@@ -1,13 +1,13 @@
 /// @file
-/// The definitions of <s2kf/evaluation/evaluation.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/evaluation/evaluation.hpp>: inline where the library is used header-only,
+/// compiled once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/evaluation/evaluation.hpp>
 
-
 namespace s2kf::evaluation {
-S2KF_INLINE void check_truth(const io::MotionTable& truth, const pipeline::Session& setup, Eigen::Index frames) {
+S2KF_INLINE void check_truth(const io::MotionTable& truth, const pipeline::Session& setup,
+                             Eigen::Index frames) {
   if (truth.joint_names != setup.model.joint_names())
     throw std::invalid_argument("the truth's joint columns are not the body model's " +
                                 std::to_string(setup.model.joint_count()) + " joints (BPx ... RAy) in order");
@@ -42,9 +42,9 @@ S2KF_INLINE double mean_marker_distance(const Eigen::Matrix3Xd& predicted, const
   return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
 }
 S2KF_INLINE track::TrackingRun track_recording(const pipeline::Session& setup, const MarkerSequence& input,
-                                        const MarkerSequence& reference, pipeline::Method method, int samples,
-                                        std::vector<double>* distance_to_reference,
-                                        const std::function<void(long)>& on_frame) {
+                                               const MarkerSequence& reference, pipeline::Method method,
+                                               int samples, std::vector<double>* distance_to_reference,
+                                               const std::function<void(long)>& on_frame) {
   if (reference.frame_count() != input.frame_count() || reference.point_count() != input.point_count())
     throw std::invalid_argument("the reference recording must have the input's frames and points");
   Eigen::Index f = 0;
@@ -70,20 +70,24 @@ S2KF_INLINE track::TrackingRun track_recording(const pipeline::Session& setup, c
   if (method == pipeline::Method::s2kf) {
     track::TrackerOptions options = setup.tracker;
     options.samples = samples;
-    track::Tracker tracker(setup.model, setup.mapping, options, setup.rate_hz, lcd_sample_set(46, samples).set);
+    track::Tracker tracker(setup.model, setup.mapping, options, setup.rate_hz,
+                           lcd_sample_set(46, samples).set);
     return run_with(tracker);
   }
   track::GradientBaseline baseline(setup.model, setup.mapping);
   return run_with(baseline);
 }
-S2KF_INLINE MethodResult summarise(pipeline::Method method, int samples, track::TrackingRun run, const pipeline::Session& setup,
-                                   const io::MotionTable* truth, long warmup) {
+S2KF_INLINE MethodResult summarise(pipeline::Method method, int samples, track::TrackingRun run,
+                                   const pipeline::Session& setup, const io::MotionTable* truth,
+                                   long warmup) {
   MethodResult result;
   result.method = method;
   result.samples = method == pipeline::Method::s2kf ? samples : 0;
-  result.converged_frame = track::converged_frame(run.mean_marker_distance, track::frames_per_second(setup.rate_hz));
-  result.level_mm = result.converged_frame >= 0 ? track::mean_from(run.mean_marker_distance, result.converged_frame)
-                                                : std::numeric_limits<double>::quiet_NaN();
+  result.converged_frame =
+      track::converged_frame(run.mean_marker_distance, track::frames_per_second(setup.rate_hz));
+  result.level_mm = result.converged_frame >= 0
+                        ? track::mean_from(run.mean_marker_distance, result.converged_frame)
+                        : std::numeric_limits<double>::quiet_NaN();
   const auto& d = run.mean_marker_distance;
   for (std::size_t k = 0; k < d.size(); ++k) {
     if (!std::isfinite(d[k])) continue;
@@ -100,9 +104,9 @@ S2KF_INLINE MethodResult summarise(pipeline::Method method, int samples, track::
   result.run = std::move(run);
   return result;
 }
-S2KF_INLINE MethodResult evaluate_method(const pipeline::Session& setup, const MarkerSequence& recording, pipeline::Method method,
-                                         int samples, const io::MotionTable* truth, long warmup,
-                                         const std::function<void(long)>& on_frame) {
+S2KF_INLINE MethodResult evaluate_method(const pipeline::Session& setup, const MarkerSequence& recording,
+                                         pipeline::Method method, int samples, const io::MotionTable* truth,
+                                         long warmup, const std::function<void(long)>& on_frame) {
   track::TrackingRun run = track_recording(setup, recording, recording, method, samples, nullptr, on_frame);
   return summarise(method, samples, std::move(run), setup, truth, warmup);
 }
@@ -133,7 +137,8 @@ S2KF_INLINE MarkerSequence hide_points(const MarkerSequence& complete, const sim
       }
   return occluded;
 }
-S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const pipeline::Session& setup, const MarkerSequence& complete,
+S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const pipeline::Session& setup,
+                                                 const MarkerSequence& complete,
                                                  const OcclusionOptions& options, long warmup,
                                                  const std::function<void(int)>& progress) {
   if (options.runs < 1) throw std::invalid_argument("the occlusion study needs at least one run");
@@ -158,8 +163,8 @@ S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const pipeline::Session& setup,
       study.max_hidden = std::max(study.max_hidden, count);
     }
     study.hidden.push_back(std::move(hidden));
-    auto track = [&](pipeline::Method method, std::vector<std::vector<double>>& distances, std::vector<double>& levels,
-                     double& worst) {
+    auto track = [&](pipeline::Method method, std::vector<std::vector<double>>& distances,
+                     std::vector<double>& levels, double& worst) {
       std::vector<double> distance;
       track_recording(setup, occluded, complete, method, options.samples, &distance);
       levels.push_back(track::level_after_convergence(distance, track::frames_per_second(setup.rate_hz)));
@@ -169,7 +174,8 @@ S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const pipeline::Session& setup,
     };
     track(pipeline::Method::s2kf, study.s2kf_distance, study.s2kf_level, study.s2kf_worst_mm);
     if (options.baseline)
-      track(pipeline::Method::baseline, study.baseline_distance, study.baseline_level, study.baseline_worst_mm);
+      track(pipeline::Method::baseline, study.baseline_distance, study.baseline_level,
+            study.baseline_worst_mm);
     if (progress) progress(r);
   }
   study.s2kf = band_over_runs(study.s2kf_distance);
@@ -183,7 +189,8 @@ S2KF_INLINE OcclusionStudy occlusion_monte_carlo(const pipeline::Session& setup,
       complete.frame_count() ? hidden_sum / (static_cast<double>(options.runs) * complete.frame_count()) : 0;
   return study;
 }
-S2KF_INLINE std::vector<MethodResult> sample_sweep(const pipeline::Session& setup, const MarkerSequence& recording,
+S2KF_INLINE std::vector<MethodResult> sample_sweep(const pipeline::Session& setup,
+                                                   const MarkerSequence& recording,
                                                    const std::vector<int>& sample_counts,
                                                    const io::MotionTable* truth, long warmup,
                                                    const std::function<void(int)>& progress) {

@@ -7,12 +7,12 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
+#include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/marker_sequence.hpp>
 #include <s2kf/io/motion_files.hpp>
-#include <s2kf/body/marker_mapping.hpp>
-#include <s2kf/evaluation/truth_metrics.hpp>
 
 #include <Eigen/Geometry>
 

@@ -14,11 +14,11 @@
 #pragma once
 
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
-#include <s2kf/body/marker_mapping.hpp>
-#include <s2kf/calibration/subject_calibration.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
@@ -34,7 +34,8 @@ namespace s2kf::evaluation {
 /// reads, every options.stride-th frame from options.skip_frames after the stretch's start (the
 /// tracker starts afresh at each stretch).
 inline std::vector<long> calibration_frame_indices(
-    const std::vector<std::pair<std::int64_t, std::int64_t>>& stretches, const calibration::CalibrationOptions& options) {
+    const std::vector<std::pair<std::int64_t, std::int64_t>>& stretches,
+    const calibration::CalibrationOptions& options) {
   std::vector<long> frames;
   for (const auto& [first, count] : stretches)
     for (std::int64_t k = options.skip_frames; k < count; k += options.stride)
@@ -63,8 +64,8 @@ struct IdentifiableSubject {
 /// the nominal.
 IdentifiableSubject identifiable_subject(const body::BodyModel& nominal, const sim::Subject& subject,
                                          const sim::Recording& recording, const std::vector<long>& frames,
-                                         const calibration::CalibrationOptions& options, double marker_noise_mm,
-                                         double prior_only_fraction);
+                                         const calibration::CalibrationOptions& options,
+                                         double marker_noise_mm, double prior_only_fraction);
 
 }  // namespace s2kf::evaluation
 

@@ -1,12 +1,11 @@
 /// @file
-/// The definitions of <s2kf/evaluation/identifiable_subject_reference.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/evaluation/identifiable_subject_reference.hpp>: inline where the library is used
+/// header-only, compiled once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/evaluation/identifiable_subject_reference.hpp>
 
 #include <s2kf/calibration/bundle_adjustment.hxx>
-
 
 namespace s2kf::evaluation {
 S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nominal,
@@ -29,7 +28,7 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
   body::MarkerMapping mapping;
   for (int m = 0; m < truth.marker_count(); ++m) mapping.point_of_marker.push_back(m);
   calibration::detail::BundleAdjustment adjustment(nominal, mapping, recording, options,
-                                      marker_noise_mm * marker_noise_mm);
+                                                   marker_noise_mm * marker_noise_mm);
 
   // The calibration frames at their true poses, each with its visible markers.
   std::vector<std::pair<long, body::Pose>> poses;
@@ -38,8 +37,8 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
       throw std::invalid_argument("identifiable_subject: a calibration frame lies outside the recording");
     poses.emplace_back(k, recording.truth[static_cast<std::size_t>(k)]);
   }
-  std::vector<calibration::detail::BundleFrame> adjusted =
-      calibration::detail::frames_at_poses(mapping, recording, adjustment.used(), poses, truth.joint_count(), false);
+  std::vector<calibration::detail::BundleFrame> adjusted = calibration::detail::frames_at_poses(
+      mapping, recording, adjustment.used(), poses, truth.joint_count(), false);
   if (adjusted.empty())
     throw std::invalid_argument("identifiable_subject: no calibration frame shows 3 markers");
 

@@ -6,13 +6,13 @@
 /// model explains (soft tissue that moves with the pose, sensor noise) and from hidden markers.
 #pragma once
 
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 
 #include <limits>
 #include <stdexcept>

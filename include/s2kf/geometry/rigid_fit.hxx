@@ -1,10 +1,9 @@
 /// @file
-/// The definitions of <s2kf/geometry/rigid_fit.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/geometry/rigid_fit.hpp>: inline where the library is used header-only, compiled
+/// once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/geometry/rigid_fit.hpp>
-
 
 namespace s2kf::geometry {
 S2KF_INLINE RigidTransform fit_rigid_transform(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to) {

@@ -5,7 +5,6 @@
 
 #include <s2kf/io/bvh.hpp>
 
-
 namespace s2kf::io {
 
 S2KF_INLINE void BvhSkeleton::write_row(std::ostream& out, const MotionRowRef& values) const {

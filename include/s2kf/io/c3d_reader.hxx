@@ -5,7 +5,6 @@
 
 #include <s2kf/io/c3d_reader.hpp>
 
-
 namespace s2kf::c3d {
 
 S2KF_INLINE const Parameter* C3dReader::parameter(std::string_view group, std::string_view name) const {

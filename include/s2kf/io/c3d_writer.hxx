@@ -5,7 +5,6 @@
 
 #include <s2kf/io/c3d_writer.hpp>
 
-
 namespace s2kf::c3d {
 
 S2KF_INLINE void C3dStreamWriter::append(

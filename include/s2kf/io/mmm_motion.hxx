@@ -5,7 +5,6 @@
 
 #include <s2kf/io/mmm_motion.hpp>
 
-
 namespace s2kf::io {
 
 S2KF_INLINE void write_mmm_header(std::ostream& out, const std::string& motion_name, double height_mm) {

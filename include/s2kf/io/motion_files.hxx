@@ -5,7 +5,6 @@
 
 #include <s2kf/io/motion_files.hpp>
 
-
 namespace s2kf::io {
 
 S2KF_INLINE void write_motion_csv_row(std::ostream& out, long frame, double time,

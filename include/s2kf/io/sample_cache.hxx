@@ -5,7 +5,6 @@
 
 #include <s2kf/io/sample_cache.hpp>
 
-
 namespace s2kf {
 S2KF_INLINE LcdResult lcd_sample_set(int dimension, int count, const LcdOptions& options,
                                      const SampleCache& cache) {

@@ -5,7 +5,6 @@
 
 #include <s2kf/io/trc_file.hpp>
 
-
 namespace s2kf::io {
 
 S2KF_INLINE void write_trc_header(std::ostream& out, const std::string& file_name, double rate_hz,

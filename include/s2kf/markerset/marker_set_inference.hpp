@@ -27,10 +27,10 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/label_text.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
-#include <s2kf/body/label_text.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/marker_sequence.hpp>
@@ -66,8 +66,8 @@ struct MarkerSetInferenceOptions {
   /// arms turned out leaves an RMS residual above this: a subject mid-motion, not one standing.
   double refine_pose_above_rms_mm = 30.0;
   track::TrackerOptions tracker;  ///< for the rounds of tracking (fewer samples are enough)
-  long frames = 600;       ///< frames tracked per round at most, from the start
-  long skip_frames = 20;   ///< tracked frames left out at the start of each round (convergence)
+  long frames = 600;              ///< frames tracked per round at most, from the start
+  long skip_frames = 20;          ///< tracked frames left out at the start of each round (convergence)
   int max_rounds = 4;
   RigidClusterOptions clusters;
   SegmentRigidityOptions rigidity;  ///< the topology check that repairs the template's assignment

@@ -13,15 +13,15 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
+#include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/calibration/height_estimate.hpp>
+#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/track/gradient_baseline.hpp>
-#include <s2kf/calibration/height_estimate.hpp>
-#include <s2kf/body/marker_set_mapping.hpp>
 #include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/stage_times.hpp>
-#include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/track/tracker.hpp>
 #include <s2kf/track/tracker_options.hpp>
 #include <s2kf/track/tracking_metrics.hpp>
@@ -54,7 +54,7 @@ inline bool plausible_height_mm(double mm) { return mm > 300 && mm < 3000; }
 
 struct SessionOptions {
   track::TrackerOptions tracker;  ///< a preset expanded (track::preset_options), samples included
-  double height_mm = 0;    ///< > 0: given; else the marker set's height, else estimated
+  double height_mm = 0;           ///< > 0: given; else the marker set's height, else estimated
   /// When no height can be estimated (no two markers on one segment): this height with a warning,
   /// or 0 to refuse the recording.
   double fallback_height_mm = 1750;
@@ -89,7 +89,7 @@ struct SessionOptions {
 /// What a recording is tracked with, ready to run.
 struct Session {
   body::MarkerSet marker_set;
-  body::BodyModel model;  ///< the set applied, scaled to the subject, calibrated when asked
+  body::BodyModel model;        ///< the set applied, scaled to the subject, calibrated when asked
   body::MarkerMapping mapping;  ///< recording points -> model markers
   /// Which segments the mapped markers observe; joints of segments no marker informs are written
   /// as NaN by run_session.
@@ -100,12 +100,12 @@ struct Session {
   std::string
       height_source;  ///< "given", "from the marker-set file", "estimated from N rigid marker pairs", ...
   std::optional<calibration::SubjectCalibration> calibration;  ///< when calibrated
-  std::int64_t calibration_frames = 0;            ///< frames the calibration used
-  Eigen::Index calibration_sample_count = 0;      ///< samples of the calibration's tracking pass
+  std::int64_t calibration_frames = 0;                         ///< frames the calibration used
+  Eigen::Index calibration_sample_count = 0;                   ///< samples of the calibration's tracking pass
   /// The stretches of the recording it used: (first frame, frame count).
   std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches;
   std::vector<std::string> warnings;  ///< the marker set's and the preparation's
-  track::StageTimes times;                   ///< read, height and calibration: the preparation's
+  track::StageTimes times;            ///< read, height and calibration: the preparation's
 
   int markers_used() const { return mapping.markers_used(); }
 };
@@ -213,7 +213,7 @@ struct RunHooks {
 /// constant in the recording's length (unless smoothing); TrackingRun keeps the per-frame series.
 /// TrackingRun::times has the seconds spent reading, tracking, smoothing and in the sink (writing).
 track::TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
-                        const RunOptions& options = {}, const RunHooks& hooks = {});
+                               const RunOptions& options = {}, const RunHooks& hooks = {});
 
 /// The calibrated subject's mean marker distance over the calibration's stretches, from the run
 /// itself: the tracker is causal, so the run's first frames are what a final calibration pass

@@ -1,6 +1,6 @@
 /// @file
-/// The definitions of <s2kf/pipeline/session.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/pipeline/session.hpp>: inline where the library is used header-only, compiled
+/// once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/pipeline/session.hpp>
@@ -56,7 +56,8 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
     track::TimedFrameSource timed(source, session.times.read);
     const double read_before = session.times.read;
     const auto start = std::chrono::steady_clock::now();
-    std::optional<calibration::HeightEstimate> estimate = calibration::estimate_height(timed, model, session.mapping);
+    std::optional<calibration::HeightEstimate> estimate =
+        calibration::estimate_height(timed, model, session.mapping);
     session.times.height = track::seconds_since(start) - (session.times.read - read_before);
     return estimate;
   }();
@@ -80,7 +81,8 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
     throw std::invalid_argument("the body height cannot be estimated from the markers; give --height");
   }
   if (geometric)
-    if (const std::string problem = calibration::units_problem(geometric->mm, session.height_mm, session.height_source);
+    if (const std::string problem =
+            calibration::units_problem(geometric->mm, session.height_mm, session.height_source);
         !problem.empty())
       throw std::invalid_argument(problem);
   if (!plausible_height_mm(session.height_mm))
@@ -117,8 +119,8 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
       session.calibration_frames = frames.frame_count();
       session.calibration_sample_count = calibration_samples.count();
       const auto start = std::chrono::steady_clock::now();
-      session.calibration = calibration::calibrate_subject(session.model, session.mapping, session.tracker, frames,
-                                              calibration_samples, calibration);
+      session.calibration = calibration::calibrate_subject(session.model, session.mapping, session.tracker,
+                                                           frames, calibration_samples, calibration);
       session.times.calibration = track::seconds_since(start);
       // Never a broken subject: one that no person could be is refused here (calibration_check.hpp).
       const calibration::CalibrationCheck check = calibration::check_calibration(
@@ -142,8 +144,9 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
   }
   return session;
 }
-S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& source, const SampleSet& samples,
-                                    const RunOptions& options, const RunHooks& hooks) {
+S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& source,
+                                           const SampleSet& samples, const RunOptions& options,
+                                           const RunHooks& hooks) {
   if (options.smooth && options.method != Method::s2kf)
     throw std::invalid_argument("smoothing works on the S2KF's estimates, not the baseline's");
   track::StageTimes times;
@@ -151,7 +154,8 @@ S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& 
   std::int64_t next = 0;
   std::string bad_coordinates;
   std::vector<int> point_segment;  // per recording point: the segment its marker rides on, or -1
-  track::SegmentObservation observed = track::observe_segments(session.model, session.mapping, &point_segment);
+  track::SegmentObservation observed =
+      track::observe_segments(session.model, session.mapping, &point_segment);
   const auto next_frame = [&](MarkerFrame& frame) {
     if (!timed_source.read(next, frame)) return false;
     ++next;
@@ -194,8 +198,8 @@ S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& 
     sink = [&](const track::TrackedFrame& f) {
       blanked = f.values;
       blank(blanked);
-      timed_sink(track::TrackedFrame{f.index, f.frame, f.time, blanked, f.mean_marker_distance, f.visible_markers,
-                              f.estimate});
+      timed_sink(track::TrackedFrame{f.index, f.frame, f.time, blanked, f.mean_marker_distance,
+                                     f.visible_markers, f.estimate});
     };
   const auto blank_table = [&](track::TrackingRun& run) {
     for (Eigen::Index r = 0; r < run.motion.values.rows(); ++r) blank(run.motion.values.row(r));
@@ -203,7 +207,7 @@ S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& 
   if (options.method == Method::baseline) {
     track::GradientBaseline baseline(session.model, session.mapping);
     track::TrackingRun run = track::run_tracking(baseline, next_frame, session.rate_hz, joint_names,
-                                   options.keep_predicted_markers, hooks.on_frame, sink);
+                                                 options.keep_predicted_markers, hooks.on_frame, sink);
     blank_table(run);
     run.segments = observed;
     return with_times(std::move(run));
@@ -211,7 +215,7 @@ S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& 
   track::Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
   if (!options.smooth) {
     track::TrackingRun run = track::run_tracking(tracker, next_frame, session.rate_hz, joint_names,
-                                   options.keep_predicted_markers, hooks.on_frame, sink);
+                                                 options.keep_predicted_markers, hooks.on_frame, sink);
     blank_table(run);
     run.segments = observed;
     warn_about_rejected_markers(session.model, run);
@@ -225,7 +229,7 @@ S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& 
     if (hooks.on_frame) hooks.on_frame(index);
   };
   track::TrackingRun run = track::run_tracking(tracker, next_frame, session.rate_hz, joint_names,
-                                 options.keep_predicted_markers, on_frame);
+                                               options.keep_predicted_markers, on_frame);
   const auto start = std::chrono::steady_clock::now();
   smoother.smooth(run.motion);
   times.smoothing += track::seconds_since(start);
@@ -237,7 +241,7 @@ S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& 
       const auto f = static_cast<std::size_t>(r);
       const Eigen::VectorXd values = run.motion.values.row(r).transpose();
       timed_sink(track::TrackedFrame{static_cast<long>(r), run.motion.frame[f], run.motion.time[f], values,
-                              run.mean_marker_distance[f], run.visible_markers[f], nullptr});
+                                     run.mean_marker_distance[f], run.visible_markers[f], nullptr});
     }
   return with_times(std::move(run));
 }

@@ -5,7 +5,6 @@
 
 #include <s2kf/sim/recording.hpp>
 
-
 namespace s2kf::sim {
 
 S2KF_INLINE io::MotionTable truth_motion(const Recording& recording,

@@ -5,7 +5,6 @@
 
 #include <s2kf/sim/subject.hpp>
 
-
 namespace s2kf::sim {
 
 S2KF_INLINE Subject make_subject(const body::BodyModel& base, const SubjectOptions& options,

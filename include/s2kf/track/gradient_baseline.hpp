@@ -6,9 +6,9 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/tracker.hpp>
 
 #include <Eigen/Cholesky>

@@ -11,11 +11,11 @@
 
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/bounded_joints.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/core/compilation_mode.hpp>
 #include <s2kf/core/constants.hpp>
 #include <s2kf/io/marker_sequence.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/track/state_chart.hpp>
 
 #include <Eigen/Core>

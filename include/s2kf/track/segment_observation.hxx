@@ -1,14 +1,14 @@
 /// @file
-/// The definitions of <s2kf/track/segment_observation.hpp>: inline where the library is used header-only, compiled once
-/// into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
+/// The definitions of <s2kf/track/segment_observation.hpp>: inline where the library is used header-only,
+/// compiled once into the library s2kf_compiled otherwise (core/compilation_mode.hpp).
 #pragma once
 
 #include <s2kf/track/segment_observation.hpp>
 
-
 namespace s2kf::track {
 
-S2KF_INLINE SegmentObservation observe_segments(const body::BodyModel& model, const body::MarkerMapping& mapping,
+S2KF_INLINE SegmentObservation observe_segments(const body::BodyModel& model,
+                                                const body::MarkerMapping& mapping,
                                                 std::vector<int>* point_segment) {
   SegmentObservation result;
   result.segments.push_back("root");

@@ -7,6 +7,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/bounded_joints.hpp>
 #include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/body/marker_measurement_model.hpp>
 #include <s2kf/body/pose.hpp>
 #include <s2kf/core/compilation_mode.hpp>
@@ -14,7 +15,6 @@
 #include <s2kf/core/marginal_update.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
-#include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/geometry/rigid_fit.hpp>
 #include <s2kf/track/state_chart.hpp>
 #include <s2kf/track/tracker_options.hpp>

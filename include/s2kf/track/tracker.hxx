@@ -5,7 +5,6 @@
 
 #include <s2kf/track/tracker.hpp>
 
-
 namespace s2kf::track {
 S2KF_INLINE Tracker::Tracker(body::BodyModel model, body::MarkerMapping mapping, TrackerOptions options,
                              double rate_hz, const SampleSet& samples)
