@@ -167,6 +167,7 @@ void expect_the_model_gauges(calibration::CalibrationOptions options, const char
 // The gauge directions found from the model: the directions whose data information is below 1e-5
 // of a marker coordinate's seen in every frame (below 1e-3 of the prior's).
 TEST(CalibrationAccuracy, FindsTheGaugeDirectionsOfTheModel) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   calibration::CalibrationOptions options;
   options.prior_only_fraction = 1e-5;
   expect_the_model_gauges(options, "information ratio");
@@ -176,6 +177,7 @@ TEST(CalibrationAccuracy, FindsTheGaugeDirectionsOfTheModel) {
 // cannot see keep (almost) none of their information through the poses' elimination, and every
 // other direction keeps more than 1e-4 of it.
 TEST(CalibrationAccuracy, TheShareCriterionFindsTheSameGaugeDirections) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   calibration::CalibrationOptions options;
   options.prior_only_share = true;
   options.prior_only_fraction = 1e-4;

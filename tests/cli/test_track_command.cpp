@@ -457,6 +457,7 @@ TEST(TrackCommand, MemoryDoesNotGrowWithTheLengthOfTheRecording) {
 /// marks the one segment no marker rides on as not observed in the CSV, the summary and the
 /// segment report.
 TEST(PartialMarkerSets, ProgramMarksTheUnobservedBodyInEveryOutput) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "partial";
   fs::create_directories(dir);
   const std::string prefix = (dir / "walk1").string();

@@ -147,6 +147,7 @@ TEST(Tracker, CleanHandstandIsTrackedTightly) {
 }
 
 TEST(Tracker, BundledHandstandWithRealisticPerturbations) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const auto recording = c3d::read_c3d(data_file("handstand.c3d"));
   const auto truth = io::load_motion_csv(data_file("handstand_truth.csv"));
   const Tracked t = track_recording(recording, truth);
@@ -165,6 +166,7 @@ TEST(Tracker, BundledHandstandWithRealisticPerturbations) {
 // its samples and keeps the arm at the limit for the rest of the recording (the upper arm's error
 // stays at the 8 degrees the arm moved); kept 0.1 rad inside, it follows the arm.
 TEST(Tracker, AJointThatLeavesItsLimitIsFollowed) {
+  S2KF_SKIP_UNDER_SANITIZERS();
   const auto recording = c3d::read_c3d(data_file("walk.c3d"));
   const auto truth = io::load_motion_csv(data_file("walk_truth.csv"));
   const auto upper_arm_error = [](const Tracked& t) {
