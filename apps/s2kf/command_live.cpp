@@ -43,7 +43,7 @@ struct LiveSettings {
   double calibration_seconds = 10;
   long frames = -1;
   double seconds = -1;
-  int backlog = 4;
+  int backlog = 16;  // 53 ms at 300 Hz: rides out the pauses of a busy machine (docs/live.md)
   double reconnect_seconds = 10;
   double max_gap_seconds = 1;
   std::string udp_json;  // HOST:PORT
@@ -326,7 +326,7 @@ const RegisterCommand live_registration{
       app.add_option("--seconds", settings->seconds, "end after S seconds of stream")
           ->check(CLI::PositiveNumber);
       app.add_option("--backlog", settings->backlog,
-                     "frames kept while the tracker is busy; older ones are dropped and counted (default 4)")
+                     "frames kept while the tracker is busy; older ones are dropped and counted (default 16)")
           ->check(CLI::Range(1, 1000000));
       app.add_option("--reconnect-seconds", settings->reconnect_seconds,
                      "after a lost connection, try again for this long (default 10)")

@@ -25,7 +25,7 @@
 namespace s2kf::live {
 
 struct FeedOptions {
-  std::size_t backlog = 4;        ///< frames kept while the consumer is busy (at least 1)
+  std::size_t backlog = 16;       ///< frames kept while the consumer is busy (at least 1)
   double connect_timeout_s = 5;   ///< for each connection attempt
   double reconnect_seconds = 10;  ///< after a lost connection, give up after this long
   /// Lines about the connection (lost, re-established, labels changed); called on the receiving
