@@ -113,6 +113,15 @@ Eigen::VectorXd static_reference_pose(const body::BodyModel& model, const std::s
   return joints;
 }
 
+Eigen::VectorXd static_reference_used(const calibration::SubjectCalibration& calibration,
+                                      const std::string& name, const std::string& option) {
+  if (calibration.static_pose_choice >= 0)
+    return body::reference_pose(
+        calibration.model,
+        body::reference_pose_names()[static_cast<std::size_t>(calibration.static_pose_choice)]);
+  return static_reference_pose(calibration.model, name.empty() ? "zero" : name, option);
+}
+
 std::string static_posture_text(const CalibratedSubject& calibrated, const SubjectSettings& settings) {
   const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
   std::string pose = settings.static_pose_name == "zero" ? "zero pose" : settings.static_pose_name;
@@ -122,13 +131,7 @@ std::string static_posture_text(const CalibratedSubject& calibrated, const Subje
   }
   if (calibration.static_posture.size() == 0) return pose;
   const Eigen::VectorXd reference =
-      calibration.static_pose_choice >= 0
-          ? body::reference_pose(
-                calibration.model,
-                body::reference_pose_names()[static_cast<std::size_t>(calibration.static_pose_choice)])
-          : static_reference_pose(calibration.model,
-                                  settings.static_pose_name.empty() ? "zero" : settings.static_pose_name,
-                                  settings.static_pose_option);
+      static_reference_used(calibration, settings.static_pose_name, settings.static_pose_option);
   const Eigen::VectorXd off = (calibration.static_posture - reference) * kDegreesPerRadian;
   Eigen::Index worst = 0;
   off.cwiseAbs().maxCoeff(&worst);

@@ -6,7 +6,6 @@
 #include <s2kf/app/user_error.hpp>
 
 #include <s2kf/body/marker_set_mapping.hpp>
-#include <s2kf/body/reference_poses.hpp>
 #include <s2kf/calibration/static_stretch.hpp>
 #include <s2kf/core/constants.hpp>
 
@@ -46,13 +45,7 @@ StretchSubject static_stretch_subject(FrameSource& source, const std::string& in
   }
   const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
   const Eigen::VectorXd reference =
-      calibration.static_pose_choice >= 0
-          ? body::reference_pose(
-                calibration.model,
-                body::reference_pose_names()[static_cast<std::size_t>(calibration.static_pose_choice)])
-          : static_reference_pose(calibration.model,
-                                  request.static_pose.empty() ? "zero" : request.static_pose,
-                                  option_name(request, "static-pose"));
+      static_reference_used(calibration, request.static_pose, option_name(request, "static-pose"));
   Eigen::Index worst = 0;
   const double largest =
       (calibration.static_posture - reference).cwiseAbs().maxCoeff(&worst) * kDegreesPerRadian;

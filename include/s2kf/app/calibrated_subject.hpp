@@ -77,6 +77,11 @@ SubjectSettings static_trial_settings(const std::string& markerset, double heigh
 Eigen::VectorXd static_reference_pose(const body::BodyModel& model, const std::string& name,
                                       const std::string& option);
 
+/// The reference pose a static calibration measured its posture against: the pose it found from
+/// the data, else the one named `name` (empty: the zero pose; `option` names it in errors).
+Eigen::VectorXd static_reference_used(const calibration::SubjectCalibration& calibration,
+                                      const std::string& name, const std::string& option);
+
 /// What the calibration found of a static trial: the reference pose and how far the posture
 /// held was from it, for messages and reports.
 std::string static_posture_text(const CalibratedSubject& calibrated, const SubjectSettings& settings);

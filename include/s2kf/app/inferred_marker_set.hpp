@@ -27,6 +27,33 @@ namespace s2kf::app {
 /// default 301.
 inline constexpr int kInferenceSamples = 101;
 
+/// The recording at `input` for inference; a UserError with the reader's sentence otherwise.
+inline MarkerSequence read_recording_to_infer(const std::string& input) {
+  try {
+    return c3d::read_c3d(input);
+  } catch (const std::exception& e) {
+    throw UserError(e.what());
+  }
+}
+
+/// Inference with the tracker at kInferenceSamples, the bundled sets as the known ones.
+inline markerset::MarkerSetInferenceOptions inference_options(int up_axis = -1) {
+  markerset::MarkerSetInferenceOptions options;
+  options.up_axis = up_axis;
+  options.tracker.samples = kInferenceSamples;
+  for (const std::string& name : bundled_marker_set_names())
+    options.known_sets.push_back(resolve_marker_set(name));
+  return options;
+}
+
+/// `set` as a marker-set file at `path` (atomically, its folder made).
+inline void write_marker_set_file(const std::string& path, const body::MarkerSet& set) {
+  if (std::filesystem::path(path).has_parent_path())
+    std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  io::write_file_atomically(path,
+                            [&](std::ostream& stream) { stream << marker_set_to_json(set).dump(2) << "\n"; });
+}
+
 /// Infers a marker set for the recording at `input` and writes it to `out` (atomically; empty: not
 /// written, the set named after the recording). `up_axis`:
 /// 0-2, or -1 to find it. Throws UserError with one sentence when the recording cannot be read or
@@ -35,17 +62,8 @@ inline constexpr int kInferenceSamples = 101;
 /// (markerset::whole_body_problem), the sentence goes there and nothing is written.
 inline markerset::InferredMarkerSet infer_marker_set_file(const std::string& input, const std::string& out,
                                                           int up_axis, std::string* not_a_body = nullptr) {
-  MarkerSequence recording;
-  try {
-    recording = c3d::read_c3d(input);
-  } catch (const std::exception& e) {
-    throw UserError(e.what());
-  }
-  markerset::MarkerSetInferenceOptions options;
-  options.up_axis = up_axis;
-  options.tracker.samples = kInferenceSamples;
-  for (const std::string& name : bundled_marker_set_names())
-    options.known_sets.push_back(resolve_marker_set(name));
+  const MarkerSequence recording = read_recording_to_infer(input);
+  const markerset::MarkerSetInferenceOptions options = inference_options(up_axis);
   markerset::InferredMarkerSet inferred;
   try {
     inferred = markerset::infer_marker_set(recording, cached_sample_set(46, kInferenceSamples), options);
@@ -63,10 +81,7 @@ inline markerset::InferredMarkerSet infer_marker_set_file(const std::string& inp
     return inferred;
   }
   inferred.set.name = std::filesystem::path(out).stem().string();
-  if (std::filesystem::path(out).has_parent_path())
-    std::filesystem::create_directories(std::filesystem::path(out).parent_path());
-  io::write_file_atomically(
-      out, [&](std::ostream& stream) { stream << marker_set_to_json(inferred.set).dump(2) << "\n"; });
+  write_marker_set_file(out, inferred.set);
   return inferred;
 }
 
@@ -91,16 +106,8 @@ inline bool labels_beyond_set(const std::vector<std::string>& labels, const body
 /// `completed_path` (unless empty) when any was placed; the choice's source says so.
 inline void complete_choice(const std::string& input, MarkerSetChoice& choice,
                             const std::string& completed_path) {
-  MarkerSequence recording;
-  try {
-    recording = c3d::read_c3d(input);
-  } catch (const std::exception& e) {
-    throw UserError(e.what());
-  }
-  markerset::MarkerSetInferenceOptions options;
-  options.tracker.samples = kInferenceSamples;
-  for (const std::string& name : bundled_marker_set_names())
-    options.known_sets.push_back(resolve_marker_set(name));
+  const MarkerSequence recording = read_recording_to_infer(input);
+  const markerset::MarkerSetInferenceOptions options = inference_options();
   markerset::CompletedMarkerSet completed;
   try {
     completed = markerset::complete_marker_set(recording, choice.set,
@@ -112,13 +119,7 @@ inline void complete_choice(const std::string& input, MarkerSetChoice& choice,
   choice.left_out = completed.left_out;
   if (completed.inferred.empty()) return;
   completed.set.name = choice.set.name + "+inferred";
-  if (!completed_path.empty()) {
-    if (std::filesystem::path(completed_path).has_parent_path())
-      std::filesystem::create_directories(std::filesystem::path(completed_path).parent_path());
-    io::write_file_atomically(completed_path, [&](std::ostream& stream) {
-      stream << marker_set_to_json(completed.set).dump(2) << "\n";
-    });
-  }
+  if (!completed_path.empty()) write_marker_set_file(completed_path, completed.set);
   choice.set = completed.set;
   choice.source += "; with " + std::to_string(completed.inferred.size()) +
                    " marker(s) it does not name placed by their motion (label segment confidence:";
