@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "test_files.hpp"
+
 namespace s2kf::test_support {
 
 /// The MMM-style model at 1750 mm with the left leg 6 % longer and the right forearm 4 % shorter.
@@ -50,7 +52,7 @@ inline io::MotionTable random_poses(const body::BodyModel& model, int frames, do
 }
 
 inline std::string scratch_directory(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::path(S2KF_TEST_TMP_DIR) / name;
+  const std::filesystem::path dir = std::filesystem::path(s2kf::test_support::tmp_dir()) / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();

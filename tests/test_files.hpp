@@ -12,19 +12,25 @@
 
 namespace s2kf::test_support {
 
+/// This test program's scratch folder under the build tree (tmp_<area>, one per program, so that
+/// programs running in parallel never share a file). Defined in a file CMake generates for each
+/// program, not by a definition on the command line: every test program then has the same
+/// definitions and can share one precompiled header.
+const char* tmp_dir();
+
 /// A file of the repository's data/ folder.
 inline std::string data_file(const std::string& name) { return std::string(S2KF_DATA_DIR) + "/" + name; }
 
 /// A scratch folder `name` under the build tree, created if absent (earlier files stay).
 inline std::filesystem::path scratch(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::path(S2KF_TEST_TMP_DIR) / name;
+  const std::filesystem::path dir = std::filesystem::path(tmp_dir()) / name;
   std::filesystem::create_directories(dir);
   return dir;
 }
 
 /// A fresh, empty scratch folder `name`.
 inline std::filesystem::path empty_scratch(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::path(S2KF_TEST_TMP_DIR) / name;
+  const std::filesystem::path dir = std::filesystem::path(tmp_dir()) / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -17,6 +17,8 @@
 #include <fstream>
 #include <string>
 
+#include "test_files.hpp"
+
 namespace {
 
 using namespace s2kf;
@@ -24,7 +26,7 @@ namespace fs = std::filesystem;
 
 TEST(CalibrateCommand, WritesASubjectFileThatLoads) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "marker_set";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "marker_set";
   fs::create_directories(dir);
   const std::string recording = std::string(S2KF_C3D_DATA_DIR) + "/85_02.c3d";
   const std::string subject = (dir / "subject.json").string();
@@ -70,7 +72,7 @@ TEST(CalibrateCommand, WritesASubjectFileThatLoads) {
 // move freely; the report records the value, and a negative one is refused by name.
 TEST(CalibrateCommand, ShrinkOptionPullsTheOffsetsTowardsTheMarkerSet) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "shrink";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "shrink";
   fs::create_directories(dir);
   const std::string recording = std::string(S2KF_C3D_DATA_DIR) + "/85_02.c3d";
   const auto calibrated = [&](const std::string& name, const std::string& options) {
@@ -114,7 +116,7 @@ namespace {
 // without it, and a nonsensical SD is refused by name.
 TEST(CalibrateCommand, StaticTrialIsCalibratedInTheZeroPose) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static";
   fs::create_directories(dir);
   const std::string recording = (dir / "static.c3d").string();
   const auto [simulated, simulate_output] =
@@ -153,7 +155,7 @@ namespace {
 // cannot work and a missing static trial are refused by name and leave no output.
 TEST(CalibrateCommand, TrackWithAStaticTrialCalibratesOnItFirst) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "track_static";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "track_static";
   fs::create_directories(dir);
   const std::string static_trial = (dir / "static.c3d").string(), walk = (dir / "walk").string();
   for (const std::string& command :

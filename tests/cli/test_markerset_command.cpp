@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "test_files.hpp"
+
 namespace {
 
 using namespace s2kf;
@@ -27,7 +29,7 @@ using test_support::data_file;
 TEST(MarkersetCommand, InfersWritesTracksAndViews) {
   S2KF_SKIP_UNDER_SANITIZERS();
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "inference";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "inference";
   fs::create_directories(dir);
   const MarkerSequence walk = c3d::read_c3d(data_file("walk.c3d")).frames(0, 300);
   std::vector<std::string> labels;

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "test_files.hpp"
+
 namespace {
 
 #ifdef S2KF_CLI
@@ -23,8 +25,8 @@ using s2kf::test_support::run_command;
 using s2kf::test_support::csv_rows;
 
 std::string scratch_file(const std::string& name) {
-  std::filesystem::create_directories(S2KF_TEST_TMP_DIR);
-  return std::string(S2KF_TEST_TMP_DIR) + "/" + name;
+  std::filesystem::create_directories(s2kf::test_support::tmp_dir());
+  return std::string(s2kf::test_support::tmp_dir()) + "/" + name;
 }
 
 TEST(CommandModel, PrintsFiftyZeroPoseMarkersScaledToTheHeight) {

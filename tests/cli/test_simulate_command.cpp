@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "test_files.hpp"
+
 #ifdef S2KF_CLI
 
 namespace {
@@ -31,7 +33,7 @@ std::string read_bytes(const std::string& path) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-std::string out_path(const std::string& name) { return std::string(S2KF_TEST_TMP_DIR) + "/" + name; }
+std::string out_path(const std::string& name) { return (s2kf::test_support::scratch("") / name).string(); }
 
 std::vector<std::vector<std::string>> read_csv(const std::string& path) {
   return s2kf::test_support::csv_rows(s2kf::test_support::read_text(path));

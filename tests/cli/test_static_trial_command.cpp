@@ -14,6 +14,8 @@
 #include <fstream>
 #include <string>
 
+#include "test_files.hpp"
+
 namespace {
 
 using namespace s2kf;
@@ -47,7 +49,7 @@ nlohmann::json read_json(const fs::path& path) {
 
 TEST(StaticTrialCommand, ThePoseHeldIsFoundFromTheData) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
   const std::string trial = t_pose_trial(dir);
   const auto [status, output] =
       test_support::run_command("calibrate " + trial + " --static --out " + (dir / "found.json").string());
@@ -70,7 +72,7 @@ TEST(StaticTrialCommand, ThePoseHeldIsFoundFromTheData) {
 // markers would have to sit half a metre from where the marker set puts them.
 TEST(StaticTrialCommand, AWrongStanceIsRefusedAndWritesNoSubject) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
   const std::string trial = t_pose_trial(dir);
   const fs::path subject = dir / "wrong.json";
   const auto [status, output] = test_support::run_command(
@@ -94,7 +96,7 @@ TEST(StaticTrialCommand, AWrongStanceIsRefusedAndWritesNoSubject) {
 // and says so; --no-static-stretch does not.
 TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
   const std::string trial = t_pose_trial(dir);
   const auto messages = [&](const std::string& name, const std::string& options) {
     const auto [status, output] = test_support::run_command("track " + trial + " --formats csv --quiet " +
@@ -113,7 +115,7 @@ TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
 }
 
 TEST(StaticTrialCommand, AnUnknownPoseIsRefusedByName) {
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "static_pose_unknown";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose_unknown";
   fs::create_directories(dir);
   const std::string recording = std::string(S2KF_DATA_DIR) + "/walk.c3d";
   const auto [status, output] = test_support::run_command(

@@ -458,7 +458,7 @@ TEST(TrackCommand, MemoryDoesNotGrowWithTheLengthOfTheRecording) {
 /// segment report.
 TEST(PartialMarkerSets, ProgramMarksTheUnobservedBodyInEveryOutput) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "partial";
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "partial";
   fs::create_directories(dir);
   const std::string prefix = (dir / "walk1").string();
   const auto [status, output] = test_support::run_command(

@@ -10,6 +10,7 @@
 
 #include "s2kf/io/c3d_reader.hpp"
 #include "s2kf/io/c3d_writer.hpp"
+#include "test_files.hpp"
 
 namespace {
 
@@ -17,8 +18,8 @@ using namespace s2kf::c3d;
 using BoolArray = Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>;
 
 std::string scratch(const std::string& name) {
-  std::filesystem::create_directories(S2KF_TEST_TMP_DIR);
-  return std::string(S2KF_TEST_TMP_DIR) + "/" + name;
+  std::filesystem::create_directories(s2kf::test_support::tmp_dir());
+  return std::string(s2kf::test_support::tmp_dir()) + "/" + name;
 }
 
 struct Synthetic {

@@ -14,6 +14,8 @@
 #include <thread>
 #include <vector>
 
+#include "test_files.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -22,7 +24,7 @@ using s2kf::SampleCache;
 
 // A fresh directory per test, so tests never see each other's files.
 fs::path cache_scratch(const std::string& name) {
-  const fs::path dir = fs::path(S2KF_TEST_TMP_DIR) / "sample_cache" / name;
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "sample_cache" / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

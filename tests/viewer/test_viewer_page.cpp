@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 #include "address_sanitizer.hpp"
+#include "test_files.hpp"
 
 #ifdef S2KF_CLI
 
@@ -33,7 +34,7 @@ namespace fs = std::filesystem;
 using s2kf::test_support::run_command;
 
 // ctest runs every test in its own process, in parallel: each process works in its own directory.
-const fs::path kWork = fs::path(S2KF_TEST_TMP_DIR) / ("viewer_" + std::to_string(::getpid()));
+const fs::path kWork = fs::path(s2kf::test_support::tmp_dir()) / ("viewer_" + std::to_string(::getpid()));
 constexpr double kHeightMm = 1750;
 constexpr int kFrames = 150;
 
@@ -198,7 +199,7 @@ TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
                                    "--screenshot=" + screenshot.string(), kWork);
   ASSERT_TRUE(fs::exists(screenshot));
   EXPECT_GT(fs::file_size(screenshot), 20000u) << "a blank screenshot";
-  fs::copy_file(screenshot, fs::path(S2KF_TEST_TMP_DIR) / "viewer_frame100.png",
+  fs::copy_file(screenshot, fs::path(s2kf::test_support::tmp_dir()) / "viewer_frame100.png",
                 fs::copy_options::overwrite_existing);
 }
 
