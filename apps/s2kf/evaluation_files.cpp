@@ -37,7 +37,14 @@ std::string cell(double value) {
 }
 
 std::vector<std::string> write_evaluation_series(const fs::path& out, const EvaluationSeries& s) {
-  const auto& [rate_hz, frames, sweep, s2kf, baseline, study, with_truth, warmup_unused] = s;
+  // Named references, not a structured binding: C++17 lambdas may not capture bindings (Clang refuses).
+  const double rate_hz = s.rate_hz;
+  const std::size_t frames = s.frames;
+  const auto& sweep = s.sweep;
+  const auto& s2kf = s.s2kf;
+  const auto& baseline = s.baseline;
+  const auto& study = s.study;
+  const bool with_truth = s.with_truth;
   auto time_of = [&](std::size_t f) { return static_cast<double>(f) / rate_hz; };
   std::vector<std::string> written;
   auto add = [&](const std::string& name) { written.push_back(name); };
