@@ -520,7 +520,9 @@ TEST(TrackerMarkerNoise, NoisyMarkerBarelyMovesTheEstimate) {
   const double effect_loose = max_difference(track_all(model, slipped, loose), track_all(model, s, loose));
   std::cout << "effect of the slipped marker: " << effect_plain << " with the common noise, " << effect_loose
             << " with 1e5 mm on that marker\n";
-  EXPECT_GT(effect_plain, 1.0);
+  // How far the slip moves the estimate depends on the samples' rounding (2.1 built by GCC, 0.9 by
+  // Clang); with the marker's huge noise it is a thousandth of that either way.
+  EXPECT_GT(effect_plain, 0.5);
   EXPECT_LT(effect_loose, 1e-3 * effect_plain);
 
   track::TrackerOptions wrong = plain;

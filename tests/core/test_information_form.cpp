@@ -452,8 +452,9 @@ TEST(InformationForm, ASharedQuadraticNonlinearityCarriedAsProductsGivesTheOrdin
     options.information_quadratic_states = &states;
     const auto result = filter.update(with, model, y, r, options);
     ASSERT_TRUE(result.ok());
-    // Float sums of both updates, amplified by the small noise: 1e-4 (measured 3e-5).
-    const double rounding = single ? 1e-4 : 1e-10;
+    // Sums of both updates, amplified by the small noise: in float 1e-4 (measured 3e-5), in double
+    // 1e-8 (measured 2.5e-10 where Clang fuses multiplies and adds, less with GCC).
+    const double rounding = single ? 1e-4 : 1e-8;
     EXPECT_LT(relative_error(with.mean, ordinary.mean), rounding) << single;
     EXPECT_LT(relative_error(with.covariance, ordinary.covariance), rounding) << single;
     EXPECT_GT(relative_error(without.mean, ordinary.mean), 100 * rounding) << single;  // measured 1.4
