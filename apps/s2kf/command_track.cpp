@@ -171,9 +171,10 @@ const RegisterCommand track_registration{
                      "the pose held in the static trial (--static, or a static stretch): zero, t-pose, "
                      "a-pose or a pose CSV (its first row); default: the one nearest the tracked posture");
       app.add_option("--static-posture", settings->request.static_posture,
-                     "near (the posture held is estimated within --static-sd of the reference pose) or "
-                     "exact (every frame within --static-sd of it)")
-          ->check(CLI::IsMember({"near", "exact"}));
+                     "near (the posture held is estimated within --static-sd of the reference pose), "
+                     "exact (every frame within --static-sd of it) or auto (exact where markers the set "
+                     "does not name were placed by their motion, else near)")
+          ->check(CLI::IsMember({"auto", "near", "exact"}));
       app.add_flag("--static-refine", settings->request.static_refine,
                    "with --static: calibrate again on each recording, starting from the static trial's "
                    "subject (the motion corrects the joint centres; the directions it cannot see stay "

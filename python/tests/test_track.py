@@ -212,7 +212,7 @@ def test_the_static_keywords_are_the_programs(cli, tmp_path):
     assert not any("static trial" in m for m in plain.summary["marker_set_messages"])
     with pytest.raises(ValueError, match="static_refine calibrates again .* it needs static"):
         s2kf.track(str(walk), static_refine=True)
-    with pytest.raises(ValueError, match="static_posture must be 'near' or 'exact'"):
+    with pytest.raises(ValueError, match="static_posture must be 'auto', 'near' or 'exact'"):
         s2kf.track(str(walk), static=str(static), static_posture="close")
     with pytest.raises(ValueError, match="static_pose: 'y-pose' is neither zero, t-pose, a-pose"):
         s2kf.calibrate(static, static=True, static_pose="y-pose")

@@ -96,8 +96,8 @@ void check_request(const TrackRequest& r) {
   if (!r.static_trial.empty() && !r.subject.empty())
     throw UserError("give " + name("static") + " or " + name("subject") + ", not both (" + name("static") +
                     " calibrates the subject on the static trial)");
-  if (!one_of(r.static_posture, {"near", "exact"}))
-    throw UserError(name("static-posture") + " must be " + choices({"near", "exact"}) + ", not '" +
+  if (!one_of(r.static_posture, {"auto", "near", "exact"}))
+    throw UserError(name("static-posture") + " must be " + choices({"auto", "near", "exact"}) + ", not '" +
                     r.static_posture + "'");
   if (r.static_refine && r.static_trial.empty())
     throw UserError(name("static-refine") + " calibrates again from the static trial's subject; it needs " +
@@ -179,6 +179,10 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
         completed ? &completed->set : nullptr);
     prepared.choice.set = calibrated.subject;
     prepared.choice.source = "calibrated on the static trial " + request.static_trial;
+    if (completed && request.static_posture == "auto")
+      prepared.choice.source +=
+          " with the posture held exactly (markers were placed by their motion, and "
+          "only the pose held gives their segments the zero of the joint angles)";
     if (completed) {
       prepared.choice.source += "; " + completed->source;
       prepared.choice.inferred = completed->inferred;
@@ -274,9 +278,9 @@ nlohmann::json summarize_track(const PreparedTrack& prepared, const track::Track
 }
 
 SubjectSettings static_trial_settings(const TrackRequest& request) {
-  SubjectSettings settings =
-      static_trial_settings(request.markerset, request.height_mm, !request.uniform_noise,
-                            request.static_sd_deg, request.static_pose, request.static_posture);
+  SubjectSettings settings = static_trial_settings(
+      request.markerset, request.height_mm, !request.uniform_noise, request.static_sd_deg,
+      request.static_pose, request.static_posture == "auto" ? std::string("near") : request.static_posture);
   settings.static_pose_option = option_name(request, "static-pose");
   return settings;
 }
@@ -285,6 +289,8 @@ CalibratedSubject calibrate_static_trial(const TrackRequest& request, const Samp
                                          const std::string& name, const body::MarkerSet* set) {
   SubjectSettings settings = static_trial_settings(request);
   if (set) settings.set = *set;
+  // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held.
+  if (set && request.static_posture == "auto") settings.static_posture = "exact";
   return calibrate_subject_file(request.static_trial, option_name(request, "static"), settings, samples,
                                 name);
 }

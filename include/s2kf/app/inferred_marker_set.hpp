@@ -127,6 +127,7 @@ inline void complete_choice(const std::string& input, MarkerSetChoice& choice,
     choice.source +=
         " " + m.label + " " + m.segment + " " + std::to_string(std::lround(100 * m.confidence)) + " %";
   choice.source += completed_path.empty() ? ")" : "), written to " + completed_path;
+  for (const std::string& note : completed.cluster_notes) choice.source += "; " + note;
 }
 
 /// choose_marker_set_for, completed with the labels the chosen set does not name (complete_choice);

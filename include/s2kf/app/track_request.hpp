@@ -41,8 +41,9 @@ struct TrackRequest {
   /// (its first row); empty: the reference pose nearest the tracked posture.
   std::string static_pose;
   /// "near": the posture held is estimated within static_sd_deg of the reference pose; "exact":
-  /// every frame's angles within static_sd_deg of it.
-  std::string static_posture = "near";
+  /// every frame's angles within static_sd_deg of it; "auto": exact where markers the set does not
+  /// name were placed by their motion (a cluster's zero comes from the pose held alone), else near.
+  std::string static_posture = "auto";
   bool static_refine = false;  ///< calibrate again on the recording, starting from the static trial's subject
   /// Without a static trial: a stretch of the recording in which the subject stands still in a
   /// reference pose is its static trial, and the recording's calibration starts from it.

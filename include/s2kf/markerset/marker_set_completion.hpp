@@ -46,6 +46,8 @@ struct CompletedMarkerSet {
   std::vector<CompletedMarker> inferred;
   std::vector<LeftOutPoint> left_out;
   std::vector<std::string> notes;  ///< what was done, one sentence each
+  /// Clusters placed by their name where their motion did not decide (one clause each).
+  std::vector<std::string> cluster_notes;
 };
 
 /// `known` completed for `recording` (labels as recorded; empty labels, the reader's model

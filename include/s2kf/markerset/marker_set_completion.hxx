@@ -57,7 +57,7 @@ S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recordi
     // The known set's own markers are places on the body too.
     for (const body::Marker& marker : body::apply_marker_set(c.base, known).markers)
       c.candidates.push_back({marker.frame, marker.offset});
-    shortlist = detail::shortlist_template_fits(c);
+    shortlist = detail::shortlist_template_fits(c, true);
     excluded_note = detail::leave_out_far_points(c, shortlist, known_points, &far);
   } catch (const std::invalid_argument& e) {
     return leave_all_out(e.what());
@@ -75,6 +75,8 @@ S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recordi
   for (std::size_t m = 0; m < mapping.point_of_marker.size(); ++m)
     for (std::size_t i = 0; i < c.points.size(); ++i)
       if (c.points[i] == mapping.point_of_marker[m]) fixed[i] = true, model_marker[i] = static_cast<int>(m);
+  // Clusters (LTBA-LTBD) go as a unit to the segment whose motion explains all their markers.
+  const std::vector<detail::MarkerCluster> clusters = detail::label_clusters(c, fixed);
   detail::Attempt kept;
   for (const detail::FramedFit& framed : shortlist) {
     detail::Attempt a = detail::initial_assignment(c, framed, shortlist.size(), excluded_note);
@@ -85,10 +87,11 @@ S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recordi
         a.set.entries[i].frame = body::marker_set_frame_name(c.base, marker.frame);
         a.set.entries[i].offset = marker.offset;
       }
-    detail::reassignment_rounds(c, a, fixed);
+    detail::reassignment_rounds(c, a, fixed, clusters);
     if (a.spread_rms_mm < kept.spread_rms_mm) kept = std::move(a);
   }
   result.notes = kept.notes;
+  result.cluster_notes = kept.cluster_notes;
 
   const std::vector<detail::PlacedMarker> placed = detail::marker_confidence(c, kept);
   const double to_reference = known.reference_height_mm / 1000.0;

@@ -406,7 +406,7 @@ struct FramedFit {
 /// direction wins clearly (beyond options.heading_margin), those where the zero pose fitted first
 /// (the subject stands there, and the standing subject defines the zero of the joint angles, as the
 /// model's zero pose does), then the clearest, at most options.template_attempts.
-inline std::vector<FramedFit> shortlist_template_fits(const InferenceContext& c) {
+inline std::vector<FramedFit> shortlist_template_fits(const InferenceContext& c, bool by_residual = false) {
   std::vector<FramedFit> clear;
   double best_margin = 0;
   long best_margin_frame = c.template_frames.front();
@@ -424,8 +424,9 @@ inline std::vector<FramedFit> shortlist_template_fits(const InferenceContext& c)
       << " % better than one facing more than 60 degrees away); give a marker set (--markerset)";
     throw std::invalid_argument(s.str());
   }
-  std::stable_sort(clear.begin(), clear.end(), [](const FramedFit& a, const FramedFit& b) {
+  std::stable_sort(clear.begin(), clear.end(), [by_residual](const FramedFit& a, const FramedFit& b) {
     if (a.fit.pose_refined != b.fit.pose_refined) return b.fit.pose_refined;
+    if (by_residual && a.fit.pose_refined) return a.fit.cost < b.fit.cost;
     return a.fit.margin > b.fit.margin;
   });
   if (!clear.front().fit.pose_refined)
@@ -491,6 +492,7 @@ struct Attempt {
   int rounds = 0;
   double spread_rms_mm = std::numeric_limits<double>::infinity();  ///< over markers on their frames
   std::vector<std::string> notes;
+  std::vector<std::string> cluster_notes;  ///< clusters placed by their name, not their motion alone
 };
 
 /// Puts point i of the attempt on its frame: where the template fit puts it, else at `fallback`
@@ -584,6 +586,147 @@ inline Attempt initial_assignment(const InferenceContext& c, const FramedFit& fr
   return a;
 }
 
+/// Markers a lab mounts together on one rigid plate (a cluster): labels that differ in their last
+/// character only (LTBA-LTBD), three or more, whose mutual distances stay steady in the recording.
+/// They are placed as a unit, on the segment whose motion explains all of them best.
+struct MarkerCluster {
+  std::string stem;                  ///< the shared label without its last character, upper case
+  std::vector<std::size_t> members;  ///< indices into the context's points
+  std::string named_segment;         ///< the segment its name says by the convention below, or ""
+};
+
+/// The segment a cluster's name says by the Vicon convention for cluster models (PELA-PELD on the
+/// pelvis; side L or R, then FM femur, TB tibia, FT foot; TH thigh, SH or SK shank as other labs
+/// write them), or "" where the name says nothing.
+inline std::string named_cluster_segment(const std::string& stem) {
+  if (stem == "PEL" || stem == "SACR" || stem == "SAC") return "root";
+  if (stem.size() != 3 || (stem[0] != 'L' && stem[0] != 'R')) return {};
+  const std::string kind = stem.substr(1), side(1, stem[0]);
+  if (kind == "FM" || kind == "TH") return side + "H";
+  if (kind == "TB" || kind == "SH" || kind == "SK") return side + "K";
+  if (kind == "FT") return side + "A";
+  return {};
+}
+
+/// A cluster's markers keep their mutual distances within this (median SD, mm): soft tissue moves
+/// the simulated subjects' markers by 8 mm each, a joint between two of them by centimetres.
+inline constexpr double kClusterSteadySdMm = 20.0;
+
+/// The clusters among the points not `fixed`, by their labels; steady ones only.
+inline std::vector<MarkerCluster> label_clusters(const InferenceContext& c, const std::vector<bool>& fixed) {
+  std::map<std::string, std::vector<std::size_t>> by_stem;
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    if (!fixed.empty() && fixed[i]) continue;
+    const std::string label = upper_case(c.label(c.points[i]));
+    const char last = label.empty() ? ' ' : label.back();
+    if (label.size() < 3 || !((last >= 'A' && last <= 'H') || (last >= '1' && last <= '9'))) continue;
+    by_stem[label.substr(0, label.size() - 1)].push_back(i);
+  }
+  std::vector<MarkerCluster> clusters;
+  for (const auto& [stem, members] : by_stem) {
+    if (members.size() < 3 || members.size() > 6) continue;
+    std::vector<double> sd;
+    for (std::size_t a = 0; a < members.size(); ++a)
+      for (std::size_t b = a + 1; b < members.size(); ++b) {
+        const double d = c.clusters.distance_sd(c.points[members[a]], c.points[members[b]]);
+        if (std::isfinite(d)) sd.push_back(d);
+      }
+    if (sd.empty()) continue;
+    std::nth_element(sd.begin(), sd.begin() + static_cast<std::ptrdiff_t>(sd.size() / 2), sd.end());
+    if (!(sd[sd.size() / 2] < kClusterSteadySdMm)) continue;
+    clusters.push_back({stem, members, named_cluster_segment(stem)});
+  }
+  return clusters;
+}
+
+/// Places each cluster as a unit (clusters: label_clusters): on the segment, among those its
+/// markers are on and the ones next to them, whose tracked motion keeps its markers steadiest (RMS
+/// of their spreads). Where the cluster's name says a segment (named_cluster_segment), the name
+/// decides when the motion does not separate the two (spreads within 1 / move_ratio of each
+/// other) or when the named segment carries no marker, so its tracked motion says nothing. Returns
+/// the markers moved; each decision that was not the motion's alone is noted in `notes`.
+template <class Place>
+int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::vector<MarkerCluster>& clusters,
+                            const Place& place, std::map<std::string, std::string>& notes) {
+  int moved = 0;
+  for (const MarkerCluster& cluster : clusters) {
+    std::vector<std::string> candidates;
+    const auto add = [&](const std::string& segment) {
+      if (!segment.empty() && std::find(candidates.begin(), candidates.end(), segment) == candidates.end())
+        candidates.push_back(segment);
+    };
+    for (std::size_t i : cluster.members) {
+      const std::string segment = body::segment_of_frame(c.base, a.frame_of[i]);
+      add(segment);
+      for (const std::string& next : adjacent_segments(c.base, segment)) add(next);
+    }
+    add(cluster.named_segment);
+    const auto carries_markers = [&](const std::string& segment) {
+      for (std::size_t i = 0; i < c.points.size(); ++i)
+        if (body::segment_of_frame(c.base, a.frame_of[i]) == segment) return true;
+      return false;
+    };
+    // Per candidate: the RMS over the members of their spread on its steadiest frame.
+    const auto cost_on = [&](const std::string& segment) {
+      double sum2 = 0;
+      for (std::size_t i : cluster.members) {
+        double best = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < c.base.frame_count(); ++k)
+          if (body::segment_of_frame(c.base, k) == segment)
+            best = std::min(best, a.spread.spread(static_cast<Eigen::Index>(i), k));
+        sum2 += best * best;
+      }
+      return std::sqrt(sum2 / static_cast<double>(cluster.members.size()));
+    };
+    std::string by_motion;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (const std::string& segment : candidates)
+      if (carries_markers(segment) && cost_on(segment) < best_cost)
+        by_motion = segment, best_cost = cost_on(segment);
+    std::string chosen = by_motion;
+    const std::string& named = cluster.named_segment;
+    if (!named.empty() && named != by_motion) {
+      const bool named_empty = !carries_markers(named);
+      const double named_cost = cost_on(named);
+      if (named_empty || by_motion.empty() || named_cost * c.options.move_ratio < best_cost) {
+        chosen = named;
+        std::ostringstream s;
+        s << cluster.stem << "* on " << named << " by its name (" << cluster.stem << "*: "
+          << (named[1] == 'H'   ? "thigh"
+              : named[1] == 'K' ? "shank"
+              : named[1] == 'A' ? "foot"
+                                : "pelvis")
+          << " by the cluster-model convention): ";
+        if (named_empty)
+          s << named << " carried no marker, so its motion could not be compared with " << by_motion << "'s";
+        else
+          s << "the motion does not separate " << named << " from " << by_motion << " (spread "
+            << std::lround(named_cost) << " against " << std::lround(best_cost) << " mm)";
+        notes[cluster.stem] = s.str();
+      } else {
+        notes.erase(cluster.stem);
+      }
+    } else {
+      notes.erase(cluster.stem);
+    }
+    if (chosen.empty()) continue;
+    for (std::size_t i : cluster.members) {
+      int frame = -1;
+      double best = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < c.base.frame_count(); ++k)
+        if (body::segment_of_frame(c.base, k) == chosen &&
+            a.spread.spread(static_cast<Eigen::Index>(i), k) < best)
+          frame = k, best = a.spread.spread(static_cast<Eigen::Index>(i), k);
+      if (body::segment_of_frame(c.base, a.frame_of[i]) == chosen) continue;
+      if (frame < 0) frame = c.base.frame_index(chosen);
+      a.frame_of[i] = frame;
+      place(i, frame);
+      ++moved;
+    }
+  }
+  return moved;
+}
+
 /// Step 4: rounds of tracking and reassignment. A marker moves only to a neighbouring segment
 /// (its parent or a child): the template fit and the topology check placed it near its segment,
 /// and a distant segment can look rigid with it only where the tracking of both failed. A marker
@@ -592,7 +735,12 @@ inline Attempt initial_assignment(const InferenceContext& c, const FramedFit& fr
 /// point on a segment that carries a fixed one takes its mean tracked position there, not the
 /// template's: the fixed markers define that segment's pose. Elsewhere (a segment only clusters
 /// ride on) the template's fitted pose stays the only reference for the zero of its joint angles.
-inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std::vector<bool>& fixed = {}) {
+inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std::vector<bool>& fixed = {},
+                                const std::vector<MarkerCluster>& clusters = {}) {
+  std::vector<bool> in_cluster(c.points.size(), false);
+  for (const MarkerCluster& cluster : clusters)
+    for (std::size_t i : cluster.members) in_cluster[i] = true;
+  std::map<std::string, std::string> cluster_notes;
   std::map<std::string, std::string> parent_segment;
   for (const body::Joint& joint : c.base.joints)
     parent_segment.emplace(joint.group, body::segment_of_frame(c.base, joint.parent_frame));
@@ -617,6 +765,15 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
     for (std::size_t i = 0; i < c.points.size(); ++i) {
       if (!fixed.empty() && fixed[i]) continue;
       const auto row = static_cast<Eigen::Index>(i);
+      if (in_cluster[i]) {  // placed with its cluster below; its offset as any marker's where it stays
+        const double own = a.spread.spread(row, a.frame_of[i]);
+        if ((from_motion(a.frame_of[i]) || !a.standing[i]) && std::isfinite(own)) {
+          if (from_motion(a.frame_of[i])) a.standing[i].reset();
+          place_point(c, a, i,
+                      a.spread.mean[i][static_cast<std::size_t>(a.frame_of[i])] * (1000.0 / a.height));
+        }
+        continue;
+      }
       int best_frame = a.frame_of[i];
       double best_spread = std::numeric_limits<double>::infinity();
       for (int k = 0; k < c.base.frame_count(); ++k)
@@ -638,6 +795,17 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
       if (from_motion(best_frame)) a.standing[i].reset();
       place_point(c, a, i, a.spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / a.height));
     }
+    moved += place_clusters_as_units(
+        c, a, clusters,
+        [&](std::size_t i, int frame) {
+          const bool measured = std::isfinite(a.spread.spread(static_cast<Eigen::Index>(i), frame));
+          if (from_motion(frame) && measured) a.standing[i].reset();
+          place_point(c, a, i,
+                      measured ? Eigen::Vector3d(a.spread.mean[i][static_cast<std::size_t>(frame)] *
+                                                 (1000.0 / a.height))
+                               : Eigen::Vector3d::Zero());
+        },
+        cluster_notes);
     a.rounds = round + 1;
     if (moved == 0) break;
   }
@@ -648,6 +816,7 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
     total2 += o * o;
   }
   a.spread_rms_mm = std::sqrt(total2 / static_cast<double>(c.points.size()));
+  for (const auto& [stem, note] : cluster_notes) a.cluster_notes.push_back(note);
 }
 
 /// A marker's confidence and spread on its segment.
