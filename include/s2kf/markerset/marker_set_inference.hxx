@@ -644,7 +644,8 @@ inline std::vector<MarkerCluster> label_clusters(const InferenceContext& c, cons
 /// of their spreads). Where the cluster's name says a segment (named_cluster_segment), the name
 /// decides when the motion does not separate the two (spreads within 1 / move_ratio of each
 /// other) or when the named segment carries no marker, so its tracked motion says nothing. Returns
-/// the markers moved; each decision that was not the motion's alone is noted in `notes`.
+/// the markers moved. Noted in `notes` (by stem): each cluster placed by its name, and each the
+/// motion places only narrowly (the runner-up's spread within 1 / move_ratio of the best's).
 template <class Place>
 int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::vector<MarkerCluster>& clusters,
                             const Place& place, std::map<std::string, std::string>& notes) {
@@ -685,30 +686,48 @@ int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::ve
         by_motion = segment, best_cost = cost_on(segment);
     std::string chosen = by_motion;
     const std::string& named = cluster.named_segment;
+    const char* named_kind = named.empty()     ? ""
+                             : named[1] == 'H' ? "thigh"
+                             : named[1] == 'K' ? "shank"
+                             : named[1] == 'A' ? "foot"
+                                               : "pelvis";
+    std::ostringstream note;
     if (!named.empty() && named != by_motion) {
       const bool named_empty = !carries_markers(named);
       const double named_cost = cost_on(named);
       if (named_empty || by_motion.empty() || named_cost * c.options.move_ratio < best_cost) {
         chosen = named;
-        std::ostringstream s;
-        s << cluster.stem << "* on " << named << " by its name (" << cluster.stem << "*: "
-          << (named[1] == 'H'   ? "thigh"
-              : named[1] == 'K' ? "shank"
-              : named[1] == 'A' ? "foot"
-                                : "pelvis")
-          << " by the cluster-model convention): ";
+        note << cluster.stem << "* on " << named << " by its name (" << named_kind
+             << " by the cluster-model convention): ";
         if (named_empty)
-          s << named << " carried no marker, so its motion could not be compared with " << by_motion << "'s";
+          note << named << " carried no marker, so its motion could not be compared with " << by_motion
+               << "'s";
         else
-          s << "the motion does not separate " << named << " from " << by_motion << " (spread "
-            << std::lround(named_cost) << " against " << std::lround(best_cost) << " mm)";
-        notes[cluster.stem] = s.str();
-      } else {
-        notes.erase(cluster.stem);
+          note << "the motion does not separate " << named << " from " << by_motion << " (spread "
+               << std::lround(named_cost) << " against " << std::lround(best_cost) << " mm)";
       }
-    } else {
-      notes.erase(cluster.stem);
     }
+    if (chosen == by_motion && !chosen.empty()) {
+      // Said where the runner-up explains the cluster nearly as well: the motion hardly separates them.
+      std::string runner_up;
+      double runner_cost = std::numeric_limits<double>::infinity();
+      for (const std::string& segment : candidates)
+        if (segment != chosen && carries_markers(segment) && cost_on(segment) < runner_cost)
+          runner_up = segment, runner_cost = cost_on(segment);
+      if (!runner_up.empty() && runner_cost * c.options.move_ratio < best_cost) {
+        note << cluster.stem << "* on " << chosen << ": the motion hardly separates " << chosen << " from "
+             << runner_up << " (spread " << std::lround(best_cost) << " against " << std::lround(runner_cost)
+             << " mm)";
+        if (named == chosen)
+          note << ", and its name says " << named_kind;
+        else
+          note << "; no name says which: check it";
+      }
+    }
+    if (note.str().empty())
+      notes.erase(cluster.stem);
+    else
+      notes[cluster.stem] = note.str();
     if (chosen.empty()) continue;
     for (std::size_t i : cluster.members) {
       int frame = -1;
