@@ -645,7 +645,8 @@ inline std::vector<MarkerCluster> label_clusters(const InferenceContext& c, cons
 /// decides when the motion does not separate the two (spreads within 1 / move_ratio of each
 /// other) or when the named segment carries no marker, so its tracked motion says nothing. Returns
 /// the markers moved. Noted in `notes` (by stem): each cluster placed by its name, and each the
-/// motion places only narrowly (the runner-up's spread within 1 / move_ratio of the best's).
+/// motion places only narrowly (the runner-up's spread within 1 / move_ratio of the best's) or
+/// beside a segment that carries no marker, where no name confirms it.
 template <class Place>
 int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::vector<MarkerCluster>& clusters,
                             const Place& place, std::map<std::string, std::string>& notes) {
@@ -723,6 +724,15 @@ int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::ve
         else
           note << "; no name says which: check it";
       }
+      // A neighbour that carries no marker has no tracked motion to compare with: say so.
+      if (named != chosen && note.str().empty())
+        for (const std::string& segment : adjacent_segments(c.base, chosen))
+          if (!carries_markers(segment)) {
+            note << cluster.stem << "* on " << chosen << ": " << segment
+                 << " next to it carries no marker, so the motion cannot tell whether " << cluster.stem
+                 << "* rides there instead, and no name says which: check it";
+            break;
+          }
     }
     if (note.str().empty())
       notes.erase(cluster.stem);
