@@ -46,7 +46,8 @@ struct CompletedMarkerSet {
   std::vector<CompletedMarker> inferred;
   std::vector<LeftOutPoint> left_out;
   std::vector<std::string> notes;  ///< what was done, one sentence each
-  /// Clusters placed by their name where their motion did not decide (one clause each).
+  /// Clusters placed by their name where their motion did not decide, or that their motion
+  /// places only narrowly or beside a segment that carries no marker (one clause each).
   std::vector<std::string> cluster_notes;
 };
 

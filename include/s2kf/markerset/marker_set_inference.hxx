@@ -492,7 +492,7 @@ struct Attempt {
   int rounds = 0;
   double spread_rms_mm = std::numeric_limits<double>::infinity();  ///< over markers on their frames
   std::vector<std::string> notes;
-  std::vector<std::string> cluster_notes;  ///< clusters placed by their name, not their motion alone
+  std::vector<std::string> cluster_notes;  ///< clusters placed by their name, or narrowly by their motion
 };
 
 /// Puts point i of the attempt on its frame: where the template fit puts it, else at `fallback`
@@ -599,7 +599,7 @@ struct MarkerCluster {
 /// pelvis; side L or R, then FM femur, TB tibia, FT foot; TH thigh, SH or SK shank as other labs
 /// write them), or "" where the name says nothing.
 inline std::string named_cluster_segment(const std::string& stem) {
-  if (stem == "PEL" || stem == "SACR" || stem == "SAC") return "root";
+  if (stem == "PEL") return "root";
   if (stem.size() != 3 || (stem[0] != 'L' && stem[0] != 'R')) return {};
   const std::string kind = stem.substr(1), side(1, stem[0]);
   if (kind == "FM" || kind == "TH") return side + "H";
@@ -639,115 +639,135 @@ inline std::vector<MarkerCluster> label_clusters(const InferenceContext& c, cons
   return clusters;
 }
 
-/// Places each cluster as a unit (clusters: label_clusters): on the segment, among those its
-/// markers are on and the ones next to them, whose tracked motion keeps its markers steadiest (RMS
-/// of their spreads). Where the cluster's name says a segment (named_cluster_segment), the name
-/// decides when the motion does not separate the two (spreads within 1 / move_ratio of each
-/// other) or when the named segment carries no marker, so its tracked motion says nothing. Returns
-/// the markers moved. Noted in `notes` (by stem): each cluster placed by its name, and each the
-/// motion places only narrowly (the runner-up's spread within 1 / move_ratio of the best's) or
-/// beside a segment that carries no marker, where no name confirms it.
-template <class Place>
-int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::vector<MarkerCluster>& clusters,
-                            const Place& place, std::map<std::string, std::string>& notes) {
-  int moved = 0;
-  for (const MarkerCluster& cluster : clusters) {
-    std::vector<std::string> candidates;
-    const auto add = [&](const std::string& segment) {
-      if (!segment.empty() && std::find(candidates.begin(), candidates.end(), segment) == candidates.end())
-        candidates.push_back(segment);
-    };
+/// One cluster's candidate segments (those its markers are on, the ones next to them, the one its
+/// name says) and how steadily each carries it in the last round of tracking.
+struct ClusterCandidates {
+  const InferenceContext& c;
+  const Attempt& a;
+  const MarkerCluster& cluster;
+  std::vector<std::string> segments;
+
+  ClusterCandidates(const InferenceContext& context, const Attempt& attempt, const MarkerCluster& unit)
+      : c(context), a(attempt), cluster(unit) {
     for (std::size_t i : cluster.members) {
       const std::string segment = body::segment_of_frame(c.base, a.frame_of[i]);
       add(segment);
       for (const std::string& next : adjacent_segments(c.base, segment)) add(next);
     }
     add(cluster.named_segment);
-    const auto carries_markers = [&](const std::string& segment) {
-      for (std::size_t i = 0; i < c.points.size(); ++i)
-        if (body::segment_of_frame(c.base, a.frame_of[i]) == segment) return true;
-      return false;
-    };
-    // Per candidate: the RMS over the members of their spread on its steadiest frame.
-    const auto cost_on = [&](const std::string& segment) {
-      double sum2 = 0;
-      for (std::size_t i : cluster.members) {
-        double best = std::numeric_limits<double>::infinity();
-        for (int k = 0; k < c.base.frame_count(); ++k)
-          if (body::segment_of_frame(c.base, k) == segment)
-            best = std::min(best, a.spread.spread(static_cast<Eigen::Index>(i), k));
-        sum2 += best * best;
+  }
+  void add(const std::string& segment) {
+    if (!segment.empty() && std::find(segments.begin(), segments.end(), segment) == segments.end())
+      segments.push_back(segment);
+  }
+  /// Whether any point rides on `segment` now: else its tracked motion is the prior's, no evidence.
+  bool carries_markers(const std::string& segment) const {
+    for (std::size_t i = 0; i < c.points.size(); ++i)
+      if (body::segment_of_frame(c.base, a.frame_of[i]) == segment) return true;
+    return false;
+  }
+  /// The RMS over the members of their spread on the segment's steadiest frame for each.
+  double cost_on(const std::string& segment) const {
+    double sum2 = 0;
+    for (std::size_t i : cluster.members) {
+      double best = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < c.base.frame_count(); ++k)
+        if (body::segment_of_frame(c.base, k) == segment)
+          best = std::min(best, a.spread.spread(static_cast<Eigen::Index>(i), k));
+      sum2 += best * best;
+    }
+    return std::sqrt(sum2 / static_cast<double>(cluster.members.size()));
+  }
+  /// The steadiest segment that carries markers, other than `except`; "" where none.
+  std::string steadiest(const std::string& except = {}) const {
+    std::string best;
+    for (const std::string& segment : segments)
+      if (segment != except && carries_markers(segment) && std::isfinite(cost_on(segment)) &&
+          (best.empty() || cost_on(segment) < cost_on(best)))
+        best = segment;
+    return best;
+  }
+};
+
+inline const char* segment_kind(const std::string& segment) {
+  if (segment.size() < 2) return "";
+  return segment[1] == 'H' ? "thigh" : segment[1] == 'K' ? "shank" : segment[1] == 'A' ? "foot" : "pelvis";
+}
+
+/// The segment a cluster goes to: the motion's choice, or its name's where the motion does not
+/// separate the two (spreads within 1 / move_ratio) or the named segment carries no marker. `note`
+/// says so, or where the motion's choice is narrow or beside a segment that carries no marker and
+/// no name confirms it.
+inline std::string choose_cluster_segment(const ClusterCandidates& candidates, double move_ratio,
+                                          std::ostringstream& note) {
+  const std::string& stem = candidates.cluster.stem;
+  const std::string& named = candidates.cluster.named_segment;
+  const std::string by_motion = candidates.steadiest();
+  const double best_cost =
+      by_motion.empty() ? std::numeric_limits<double>::infinity() : candidates.cost_on(by_motion);
+  if (!named.empty() && named != by_motion) {
+    const bool named_empty = !candidates.carries_markers(named);
+    const double named_cost = candidates.cost_on(named);
+    if (named_empty || by_motion.empty() || named_cost * move_ratio < best_cost) {
+      note << stem << "* on " << named << " by its name (" << segment_kind(named)
+           << " by the cluster-model convention): ";
+      if (named_empty)
+        note << named << " carried no marker, so its motion could not be compared with " << by_motion << "'s";
+      else
+        note << "the motion does not separate " << named << " from " << by_motion << " (spread "
+             << std::lround(named_cost) << " against " << std::lround(best_cost) << " mm)";
+      return named;
+    }
+  }
+  if (by_motion.empty()) return by_motion;
+  const std::string runner_up = candidates.steadiest(by_motion);
+  const double runner_cost =
+      runner_up.empty() ? std::numeric_limits<double>::infinity() : candidates.cost_on(runner_up);
+  if (!runner_up.empty() && runner_cost * move_ratio < best_cost) {
+    note << stem << "* on " << by_motion << ": the motion hardly separates " << by_motion << " from "
+         << runner_up << " (spread " << std::lround(best_cost) << " against " << std::lround(runner_cost)
+         << " mm)";
+    if (named == by_motion)
+      note << ", and its name says " << segment_kind(named);
+    else
+      note << "; no name says which: check it";
+  } else if (named != by_motion) {
+    // A neighbour that carries no marker has no tracked motion to compare with.
+    for (const std::string& segment : adjacent_segments(candidates.c.base, by_motion))
+      if (!candidates.carries_markers(segment)) {
+        note << stem << "* on " << by_motion << ": " << segment
+             << " next to it carries no marker, so the motion cannot tell whether " << stem
+             << "* rides there instead, and no name says which: check it";
+        break;
       }
-      return std::sqrt(sum2 / static_cast<double>(cluster.members.size()));
-    };
-    std::string by_motion;
-    double best_cost = std::numeric_limits<double>::infinity();
-    for (const std::string& segment : candidates)
-      if (carries_markers(segment) && cost_on(segment) < best_cost)
-        by_motion = segment, best_cost = cost_on(segment);
-    std::string chosen = by_motion;
-    const std::string& named = cluster.named_segment;
-    const char* named_kind = named.empty()     ? ""
-                             : named[1] == 'H' ? "thigh"
-                             : named[1] == 'K' ? "shank"
-                             : named[1] == 'A' ? "foot"
-                                               : "pelvis";
+  }
+  return by_motion;
+}
+
+/// Places each cluster as a unit (clusters: label_clusters) on the segment choose_cluster_segment
+/// gives, each marker on that segment's frame that carries it steadiest; `place(i, frame)` sets
+/// its offset. Returns the markers moved; `notes` (by stem) holds each cluster's note, if any.
+template <class Place>
+int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::vector<MarkerCluster>& clusters,
+                            const Place& place, std::map<std::string, std::string>& notes) {
+  int moved = 0;
+  for (const MarkerCluster& cluster : clusters) {
     std::ostringstream note;
-    if (!named.empty() && named != by_motion) {
-      const bool named_empty = !carries_markers(named);
-      const double named_cost = cost_on(named);
-      if (named_empty || by_motion.empty() || named_cost * c.options.move_ratio < best_cost) {
-        chosen = named;
-        note << cluster.stem << "* on " << named << " by its name (" << named_kind
-             << " by the cluster-model convention): ";
-        if (named_empty)
-          note << named << " carried no marker, so its motion could not be compared with " << by_motion
-               << "'s";
-        else
-          note << "the motion does not separate " << named << " from " << by_motion << " (spread "
-               << std::lround(named_cost) << " against " << std::lround(best_cost) << " mm)";
-      }
-    }
-    if (chosen == by_motion && !chosen.empty()) {
-      // Said where the runner-up explains the cluster nearly as well: the motion hardly separates them.
-      std::string runner_up;
-      double runner_cost = std::numeric_limits<double>::infinity();
-      for (const std::string& segment : candidates)
-        if (segment != chosen && carries_markers(segment) && cost_on(segment) < runner_cost)
-          runner_up = segment, runner_cost = cost_on(segment);
-      if (!runner_up.empty() && runner_cost * c.options.move_ratio < best_cost) {
-        note << cluster.stem << "* on " << chosen << ": the motion hardly separates " << chosen << " from "
-             << runner_up << " (spread " << std::lround(best_cost) << " against " << std::lround(runner_cost)
-             << " mm)";
-        if (named == chosen)
-          note << ", and its name says " << named_kind;
-        else
-          note << "; no name says which: check it";
-      }
-      // A neighbour that carries no marker has no tracked motion to compare with: say so.
-      if (named != chosen && note.str().empty())
-        for (const std::string& segment : adjacent_segments(c.base, chosen))
-          if (!carries_markers(segment)) {
-            note << cluster.stem << "* on " << chosen << ": " << segment
-                 << " next to it carries no marker, so the motion cannot tell whether " << cluster.stem
-                 << "* rides there instead, and no name says which: check it";
-            break;
-          }
-    }
+    const std::string chosen =
+        choose_cluster_segment(ClusterCandidates(c, a, cluster), c.options.move_ratio, note);
     if (note.str().empty())
       notes.erase(cluster.stem);
     else
       notes[cluster.stem] = note.str();
     if (chosen.empty()) continue;
     for (std::size_t i : cluster.members) {
-      int frame = -1;
+      if (body::segment_of_frame(c.base, a.frame_of[i]) == chosen) continue;
+      int frame = c.base.frame_index(chosen);
       double best = std::numeric_limits<double>::infinity();
       for (int k = 0; k < c.base.frame_count(); ++k)
         if (body::segment_of_frame(c.base, k) == chosen &&
             a.spread.spread(static_cast<Eigen::Index>(i), k) < best)
           frame = k, best = a.spread.spread(static_cast<Eigen::Index>(i), k);
-      if (body::segment_of_frame(c.base, a.frame_of[i]) == chosen) continue;
-      if (frame < 0) frame = c.base.frame_index(chosen);
       a.frame_of[i] = frame;
       place(i, frame);
       ++moved;
