@@ -1,4 +1,5 @@
 #include <s2kf/body/marker_mapping.hpp>
+#include <s2kf/core/bordered_cholesky.hpp>
 #include <s2kf/core/instruction_set.hpp>
 #include <s2kf/core/product_tiles.hpp>
 #include <s2kf/io/c3d_reader.hpp>
@@ -8,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -83,6 +86,113 @@ TEST(InstructionSet, EveryVariantsProductTilesAgreeWithTheProductInDouble) {
               .all())
           << "a lower product wrote above the diagonal";
     }
+  }
+}
+
+// The double-precision tiles (the filter's rank updates, its sample draw S Z, the bordered
+// Cholesky factorisation) of each variant against Eigen's products. A sum of k products, each
+// rounded (or fused) once and added in some order, is within k u sum |a_t b_t| of the exact value
+// (u = 2^-53, Higham's gamma_k); Eigen's and the tiles' may differ by twice that. Fused variants
+// (AVX2, AVX-512) add the same terms in the same order, so they agree to the last bit.
+TEST(InstructionSet, EveryVariantsDoubleTilesAgreeWithEigenAndFusedVariantsToTheBit) {
+  const RestoreInstructionSet restore;
+  const double u = std::numeric_limits<double>::epsilon() / 2;
+  std::mt19937 random(11);
+  std::normal_distribution<double> normal(0.0, 3.0);
+  for (const auto& [rows, columns, samples] :
+       std::vector<std::array<Eigen::Index, 3>>{{46, 150, 46}, {46, 46, 150}, {93, 31, 40}, {5, 3, 2}}) {
+    const Eigen::MatrixXd a = Eigen::MatrixXd::NullaryExpr(rows, samples, [&] { return normal(random); });
+    const Eigen::MatrixXd b = Eigen::MatrixXd::NullaryExpr(columns, samples, [&] { return normal(random); });
+    // A lower triangular left operand (zeros above its diagonal, as the tiles require), rows x rows.
+    const Eigen::MatrixXd l = Eigen::MatrixXd(Eigen::MatrixXd::NullaryExpr(rows, rows, [&] {
+                                                return normal(random);
+                                              }).triangularView<Eigen::Lower>());
+    const Eigen::MatrixXd z = Eigen::MatrixXd::NullaryExpr(columns, rows, [&] { return normal(random); });
+    const Eigen::MatrixXd c0 = Eigen::MatrixXd::NullaryExpr(rows, columns, [&] { return normal(random); });
+    const Eigen::MatrixXd s0 = Eigen::MatrixXd::NullaryExpr(rows, rows, [&] { return normal(random); });
+    const auto bound = [u](const Eigen::MatrixXd& magnitude, Eigen::Index k) {
+      return Eigen::MatrixXd(2 * (k + 1) * u * magnitude);
+    };
+    const Eigen::MatrixXd product = c0 + a * b.transpose();
+    const Eigen::MatrixXd product_bound =
+        bound(c0.cwiseAbs() + a.cwiseAbs() * b.cwiseAbs().transpose(), samples);
+    Eigen::MatrixXd down = s0;
+    down.selfadjointView<Eigen::Lower>().rankUpdate(a, -1.0);
+    const Eigen::MatrixXd down_bound =
+        bound(s0.cwiseAbs() + a.cwiseAbs() * a.cwiseAbs().transpose(), samples);
+    const Eigen::MatrixXd triangular = c0 + l.triangularView<Eigen::Lower>() * z.transpose();
+    const Eigen::MatrixXd triangular_bound =
+        bound(c0.cwiseAbs() + l.cwiseAbs() * z.cwiseAbs().transpose(), rows);
+    std::vector<std::array<Eigen::MatrixXd, 3>> results;
+    for (InstructionSet set : runnable_sets()) {
+      SCOPED_TRACE(std::string(s2kf::instruction_set_name(set)) + ", " + std::to_string(rows) + " x " +
+                   std::to_string(columns) + " over " + std::to_string(samples));
+      s2kf::use_instruction_set(set);
+      Eigen::MatrixXd c = c0;
+      s2kf::add_product_transposed(c, a, b);
+      EXPECT_LE(((c - product).cwiseAbs() - product_bound).maxCoeff(), 0.0);
+      Eigen::MatrixXd s = s0;
+      s2kf::add_self_product_lower(s, a, -1.0);
+      EXPECT_LE(
+          ((s - down).triangularView<Eigen::Lower>().toDenseMatrix().cwiseAbs() - down_bound).maxCoeff(),
+          0.0);
+      EXPECT_TRUE((s.triangularView<Eigen::StrictlyUpper>().toDenseMatrix().array() ==
+                   s0.triangularView<Eigen::StrictlyUpper>().toDenseMatrix().array())
+                      .all())
+          << "a lower update wrote above the diagonal";
+      Eigen::MatrixXd t = c0;
+      s2kf::add_triangular_product_transposed(t, l, z);
+      EXPECT_LE(((t - triangular).cwiseAbs() - triangular_bound).maxCoeff(), 0.0);
+      results.push_back({c, s, t});
+    }
+    const std::vector<InstructionSet> sets = runnable_sets();
+    for (std::size_t v = 0; v + 1 < sets.size(); ++v)
+      if (sets[v] != InstructionSet::sse2) {
+        for (int k = 0; k < 3; ++k) EXPECT_TRUE(results[v][k] == results.back()[k]) << "result " << k;
+      }
+  }
+}
+
+// The bordered factorisation with each variant's tiles: [A; B] -> [L; B L^-T] with L L^T = A and
+// X L^T = B to the backward error of a Cholesky factorisation and of a triangular solve
+// (|dA| <= gamma_{n+1} |L| |L|^T, Higham 10.1; |dB| <= gamma_n |X| |L|^T), at the filter's sizes
+// and at sizes that leave partial tiles and column groups.
+TEST(InstructionSet, EveryVariantsBorderedCholeskyHasTheBackwardErrorOfACholeskyFactorisation) {
+  const RestoreInstructionSet restore;
+  const double u = std::numeric_limits<double>::epsilon() / 2;
+  std::mt19937 random(13);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (const auto& [size, border] :
+       std::vector<std::array<Eigen::Index, 2>>{{46, 47}, {93, 47}, {30, 47}, {7, 3}}) {
+    const Eigen::MatrixXd m = Eigen::MatrixXd::NullaryExpr(size, size + 5, [&] { return normal(random); });
+    const Eigen::MatrixXd a = m * m.transpose();
+    const Eigen::MatrixXd b = Eigen::MatrixXd::NullaryExpr(border, size, [&] { return normal(random); });
+    std::vector<Eigen::MatrixXd> panels;
+    for (InstructionSet set : runnable_sets()) {
+      SCOPED_TRACE(std::string(s2kf::instruction_set_name(set)) + ", size " + std::to_string(size));
+      s2kf::use_instruction_set(set);
+      s2kf::BorderedCholesky bordered;
+      bordered.resize(size, border);
+      auto panel = bordered.panel();
+      panel.topRows(size).triangularView<Eigen::Lower>() = a;
+      panel.bottomRows(border) = b;
+      ASSERT_TRUE(bordered.factorise());
+      const Eigen::MatrixXd l = panel.topRows(size).triangularView<Eigen::Lower>();
+      const Eigen::MatrixXd x = panel.bottomRows(border);
+      const double gamma_factor = (size + 1) * u / (1 - (size + 1) * u);
+      EXPECT_LE(((l * l.transpose() - a).cwiseAbs() - gamma_factor * l.cwiseAbs() * l.cwiseAbs().transpose())
+                    .maxCoeff(),
+                0.0);
+      EXPECT_LE(((x * l.transpose() - b).cwiseAbs() - gamma_factor * x.cwiseAbs() * l.cwiseAbs().transpose())
+                    .maxCoeff(),
+                0.0);
+      panels.push_back(Eigen::MatrixXd(panel));
+    }
+    const std::vector<InstructionSet> sets = runnable_sets();
+    for (std::size_t v = 0; v + 1 < sets.size(); ++v)
+      if (sets[v] != InstructionSet::sse2) {
+        EXPECT_TRUE(panels[v] == panels.back()) << "fused variants differ";
+      }
   }
 }
 

@@ -8,9 +8,11 @@
 /// information matrix (the prior's factor S and the information vector as the border). Eigen's
 /// LLT followed by a triangular solve does the same arithmetic, but at these sizes (20-200 rows)
 /// both run far below the machine's multiply-add rate; this left-looking factorisation computes
-/// four columns at a time over row tiles that stay in registers, about twice as fast as the two
-/// calls together.
+/// four columns at a time over row tiles that stay in registers (core/product_tiles.hpp, compiled for
+/// the processor's instruction set), about twice as fast as the two calls together.
 #pragma once
+
+#include <s2kf/core/product_tiles.hpp>
 
 #include <Eigen/Core>
 
@@ -24,14 +26,8 @@ namespace s2kf {
 /// smaller ones allocates nothing.
 class BorderedCholesky {
  public:
-  /// Rows of one register tile: four columns of this many doubles are 16 AVX-512 registers (the
-  /// machine has 32) or 16 SSE/AVX registers of 8 doubles in all. The panel's rows are padded to
-  /// a multiple of kPadRows only: the last rows go in tiles of that many.
-#if defined(__AVX512F__)
-  static constexpr Eigen::Index kTileRows = 32;
-#else
-  static constexpr Eigen::Index kTileRows = 8;
-#endif
+  /// The panel's rows are padded to a multiple of kPadRows (zero rows beneath the border), so that
+  /// the column loops run over whole vectors.
   static constexpr Eigen::Index kPadRows = 8;
   static constexpr Eigen::Index kTileColumns = 4;
 
@@ -68,36 +64,18 @@ class BorderedCholesky {
  private:
   static Eigen::Index padded_rows(Eigen::Index rows) { return (rows + kPadRows - 1) / kPadRows * kPadRows; }
 
-  /// Columns j..j+width of the panel, from the first tile holding row j down: minus the sum over
-  /// the earlier columns k of p(j + c, k) p(:, k), four target columns per pass over a column k so
-  /// that its tile is loaded once for all four. Rows above j of a tile receive values nobody reads.
+  /// Columns j..j+width of the panel, from the first padded row group holding row j down: minus the
+  /// sum over the earlier columns k of p(j + c, k) p(:, k), in register tiles compiled for the
+  /// processor's instruction set (core/product_tiles.hpp): [L; B](r.., j..) -= P(r.., :j) P(j.., :j)^T.
+  /// Rows above j of a tile receive values nobody reads.
   static void subtract_earlier_columns(double* p, Eigen::Index stride, Eigen::Index padded, Eigen::Index j,
                                        Eigen::Index width) {
     if (j == 0) return;
-    double* target[kTileColumns];
-    for (Eigen::Index c = 0; c < kTileColumns; ++c) target[c] = p + (j + std::min(c, width - 1)) * stride;
-    Eigen::Index r = j / kPadRows * kPadRows;
-    for (; r + kTileRows <= padded; r += kTileRows) subtract_tile<kTileRows>(p, stride, r, j, width, target);
-    for (; r < padded; r += kPadRows) subtract_tile<kPadRows>(p, stride, r, j, width, target);
-  }
-
-  /// One tile of R rows from row r: the four columns' tile stays in registers while every earlier
-  /// column passes once.
-  template <Eigen::Index R>
-  static void subtract_tile(const double* p, Eigen::Index stride, Eigen::Index r, Eigen::Index j,
-                            Eigen::Index width, double* const* target) {
-    constexpr Eigen::Index W = kTileColumns;
-    using Tile = Eigen::Matrix<double, R, W>;
-    using TileColumn = Eigen::Matrix<double, R, 1>;
-    Tile tile;
-    for (Eigen::Index c = 0; c < W; ++c) tile.col(c) = Eigen::Map<const TileColumn>(target[c] + r);
-    for (Eigen::Index k = 0; k < j; ++k) {
-      const double* column = p + k * stride;
-      Eigen::Matrix<double, 1, W> factor;
-      for (Eigen::Index c = 0; c < W; ++c) factor(c) = column[j + std::min(c, width - 1)];
-      tile.noalias() -= Eigen::Map<const TileColumn>(column + r) * factor;
-    }
-    for (Eigen::Index c = 0; c < width; ++c) Eigen::Map<TileColumn>(target[c] + r) = tile.col(c);
+    product_tiles_detail::Product<double> product{{p, stride}, {p + j, stride}, j,    p + j * stride,
+                                                  stride,      padded,          width};
+    product.alpha = -1;
+    product.first_row = j / kPadRows * kPadRows;
+    product_tiles_detail::add_products(product);
   }
 
   /// The columns j..j+width among themselves: each minus the earlier ones of the group, then
@@ -120,7 +98,7 @@ class BorderedCholesky {
     return true;
   }
 
-  Eigen::MatrixXd storage_;  // rows a multiple of kTileRows: the stride of every panel
+  Eigen::MatrixXd storage_;  // rows a multiple of kPadRows: the stride of every panel
   Eigen::Index size_ = 0, rows_ = 0;
 };
 

@@ -1,5 +1,6 @@
 /// @file
-/// Which instruction set the hot kernels (the moments' products, batched forward kinematics) run
+/// Which instruction set the hot kernels (the product tiles: the moments' float products, the
+/// filter's double rank updates, sample draw and bordered Cholesky; batched forward kinematics) run
 /// with: each is compiled for SSE2, AVX2 + FMA and AVX-512 (GCC/Clang `target` attributes on x86-64)
 /// and the best one the processor has is chosen at run time, so a portable binary runs as fast as
 /// one built with -march=native. S2KF_SIMD=sse2|avx2|avx512 forces a variant (measurements, tests).

@@ -270,11 +270,18 @@ class FilterCore {
   /// step does not allocate. Measured no slower than one product over all samples.
   static constexpr Eigen::Index kChunk = 96;
 
-  /// Lower half of c += d d^T, as rank-kChunk updates.
+  /// Lower half of c += d d^T: in the register tiles compiled for the processor
+  /// (core/product_tiles.hpp) where d is column-major, else as rank-kChunk updates.
   template <typename Target, typename Deviations>
   static void rank_update_lower(Target& c, const Deviations& d) {
-    for (Eigen::Index k = 0; k < d.cols(); k += kChunk)
-      c.template selfadjointView<Eigen::Lower>().rankUpdate(d.middleCols(k, std::min(kChunk, d.cols() - k)));
+    using D = std::decay_t<Deviations>;
+    if constexpr (!D::IsRowMajor && (D::Flags & Eigen::DirectAccessBit) != 0) {
+      add_self_product_lower(c, d);
+    } else {
+      for (Eigen::Index k = 0; k < d.cols(); k += kChunk)
+        c.template selfadjointView<Eigen::Lower>().rankUpdate(
+            d.middleCols(k, std::min(kChunk, d.cols() - k)));
+    }
   }
 
   /// Columns times sqrt(w_i); one scalar when all weights are equal.
@@ -426,6 +433,8 @@ class FilterCore {
   Eigen::LLT<Eigen::MatrixXd> factor_;
   Eigen::MatrixXd x_dev_, x_, propagated_, predictions_, y_dev_, cyy_, cyx_, posterior_covariance_;
   Eigen::MatrixXd half_deviation_;   ///< S z_k of the +s half of a symmetric set (then times sqrt w)
+  Eigen::MatrixXd half_points_t_;    ///< the z_k of that half, transposed (h x n): S Z^T's operand
+  Eigen::MatrixXd lower_factor_;     ///< S with zeros above its diagonal
   Eigen::MatrixXd pair_difference_;  ///< sqrt(w) (y+_k - y-_k) of the observed rows
   Eigen::VectorXd y_mean_, innovation_;
   Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> index_;

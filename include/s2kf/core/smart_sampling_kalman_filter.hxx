@@ -32,6 +32,7 @@ S2KF_INLINE FilterCore::FilterCore(SampleSet samples) : samples_(std::move(sampl
                          : Eigen::MatrixXd(samples_.points * sqrt_weights_.asDiagonal());
     scaled_points_f_ = scaled_points_.cast<float>();
   }
+  if (symmetric_) half_points_t_ = samples_.points.middleCols(origin_count_, half_count_).transpose();
 }
 
 // Out of the class, so that a program that links the compiled library (S2KF_COMPILED) takes
@@ -176,7 +177,7 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
   }
   // C+ = C - A A^T must stay positive definite; check on a copy before touching the state.
   posterior_covariance_ = covariance;
-  posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(gain_factor, -1.0);
+  add_self_product_lower(posterior_covariance_, gain_factor, -1.0);
   if (!complete_posterior_is_positive_definite()) {
     result.status = FilterStatus::posterior_not_positive_definite;
     return result;
@@ -441,7 +442,7 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
   // mean += S u+ = T t_u, C+ = T T^T.
   state_step_.noalias() = whitening * whitened_information.tail(n);
   posterior_covariance_.setZero(n, n);
-  posterior_covariance_.template selfadjointView<Eigen::Lower>().rankUpdate(whitening);
+  add_self_product_lower(posterior_covariance_, whitening);
   if (!complete_posterior_is_positive_definite()) {
     result.status = FilterStatus::posterior_not_positive_definite;
     return result;
@@ -461,11 +462,10 @@ S2KF_INLINE FilterStatus FilterCore::draw_samples(const Eigen::Ref<const Eigen::
   if (symmetric_ && !keep_full_deviations_) {
     // S (-z) = -(S z) exactly: map the half set only, then mirror it.
     const Eigen::Index h = half_count_, o = origin_count_;
-    half_deviation_.resize(mean.size(), h);
-    for (Eigen::Index k = 0; k < h; k += kChunk) {
-      const Eigen::Index c = std::min(kChunk, h - k);
-      half_deviation_.middleCols(k, c).noalias() = factor_.matrixL() * samples_.points.middleCols(o + k, c);
-    }
+    // S Z in the register tiles of the processor's instruction set (core/product_tiles.hpp).
+    lower_factor_ = factor_.matrixL();
+    half_deviation_.setZero(mean.size(), h);
+    add_triangular_product_transposed(half_deviation_, lower_factor_, half_points_t_);
     x_.resize(mean.size(), samples_.count());
     if (o == 1) x_.col(0) = mean;
     x_.middleCols(o, h) = half_deviation_.colwise() + mean;
