@@ -186,7 +186,9 @@ TEST(InstructionSet, EveryVariantsBorderedCholeskyHasTheBackwardErrorOfACholesky
       EXPECT_LE(((x * l.transpose() - b).cwiseAbs() - gamma_factor * x.cwiseAbs() * l.cwiseAbs().transpose())
                     .maxCoeff(),
                 0.0);
-      panels.push_back(Eigen::MatrixXd(panel));
+      Eigen::MatrixXd result(size + border, size);  // the strict upper half of L is unspecified
+      result << l, x;
+      panels.push_back(result);
     }
     const std::vector<InstructionSet> sets = runnable_sets();
     for (std::size_t v = 0; v + 1 < sets.size(); ++v)
