@@ -6,7 +6,8 @@
 # once the tracker has caught up with the held first second (median, p99, max, frames over one frame
 # period), the frames dropped while busy (and of them, before the first pose), the frames tracked
 # while catching up and the latest of them, the tracker's own median time per frame and the most
-# memory the program held. SECONDS_PER_RATE is a whole number.
+# memory the program held. SECONDS_PER_RATE is a whole number. With RSS_LOG=FILE set, the live
+# program's resident memory (VmRSS) is also written to FILE every 10 s: rate, seconds, kB.
 #   benchmarks/live_latency.sh [BUILD_DIR] [SECONDS_PER_RATE] [RATES...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -30,7 +31,20 @@ for rate in "${rates[@]}"; do
   server=$!
   for _ in $(seq 100); do [ -s "$work/port" ] && break; sleep 0.05; done
   /usr/bin/time -f %M -o "$work/rss" "$s2kf" live "127.0.0.1:$(cat "$work/port")" --subject "$work/subject.json" \
-    --samples 301 --seconds "$seconds" --formats csv --quiet --udp-json 127.0.0.1:9 --out "$work/live_$rate"
+    --samples 301 --seconds "$seconds" --formats csv --quiet --udp-json 127.0.0.1:9 --out "$work/live_$rate" &
+  timer=$!
+  if [ -n "${RSS_LOG:-}" ]; then
+    sleep 0.5
+    live=$(pgrep -P "$timer" || true)  # the program, under /usr/bin/time
+    start=$SECONDS
+    while rss=$(awk '/^VmRSS/ {print $2}' "/proc/$live/status" 2>/dev/null) && [ -n "$rss" ]; do
+      echo "$rate $(( SECONDS - start )) $rss" >>"$RSS_LOG"
+      sleep 10
+    done &
+    sampler=$!
+  fi
+  wait "$timer"
+  [ -z "${RSS_LOG:-}" ] || kill "$sampler" 2>/dev/null || true
   kill "$server"
   wait "$server" 2>/dev/null || true
   python3 - "$work/live_$rate.json" "$rate" "$(cat "$work/rss")" <<'PY'

@@ -17,7 +17,7 @@
 #include <s2kf/live/live_feed.hpp>
 #include <s2kf/live/live_frame_source.hpp>
 #include <s2kf/live/udp_sender.hpp>
-#include <s2kf/track/tracking_metrics.hpp>
+#include <s2kf/track/quantile_histogram.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -195,7 +195,7 @@ void run_live(LiveSettings settings) {
   // The row's values are the pose columns after frame and time.
   std::vector<std::string> columns = body::pose_column_names(body::mmm_body_model(1000).joint_names());
   columns.erase(columns.begin(), columns.begin() + 2);
-  std::vector<double> latency_ms;  // once caught up with the held first stretch
+  track::QuantileHistogram latency_ms;  // once caught up with the held first stretch; fixed memory
   long deadline_misses = 0;
   long catch_up_frames = 0;  // tracked while catching up: late by design, kept apart
   double catch_up_max_ms = 0;
@@ -237,7 +237,7 @@ void run_live(LiveSettings settings) {
         ++catch_up_frames;
         catch_up_max_ms = std::max(catch_up_max_ms, ms);
       } else {
-        latency_ms.push_back(ms);
+        latency_ms.add(ms);
         if (ms > period_ms) ++deadline_misses;
       }
     }
@@ -260,13 +260,13 @@ void run_live(LiveSettings settings) {
     live["calibration_frames"] = first.frame_count();
     live["reconnects"] = counts.reconnects;
     live["label_changes"] = counts.label_changes;
-    live["latency_ms"] = {
-        {"frames", latency_ms.size()},
-        {"median", track::quantile(latency_ms, 0.5)},
-        {"p99", track::quantile(latency_ms, 0.99)},
-        {"max", latency_ms.empty() ? std::nan("") : *std::max_element(latency_ms.begin(), latency_ms.end())},
-        {"deadline_ms", period_ms},
-        {"deadline_misses", deadline_misses}};
+    nlohmann::json& latency = live["latency_ms"];
+    latency["frames"] = latency_ms.count();
+    latency["median"] = latency_ms.quantile(0.5);
+    latency["p99"] = latency_ms.quantile(0.99);
+    latency["max"] = latency_ms.max();
+    latency["deadline_ms"] = period_ms;
+    latency["deadline_misses"] = deadline_misses;
     live["catch_up"] = {{"frames", catch_up_frames}, {"max_ms", catch_up_max_ms}};
     if (udp)
       live["udp_json"] = {{"address", settings.udp_json}, {"sent", udp->sent()}, {"dropped", udp->dropped()}};

@@ -165,7 +165,9 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
       figure_pose = body::pose_from_row(f.values);
     if (extra.on_row) extra.on_row(f);
   };
-  const track::TrackingRun run = app::run_track(prepared, *input.frames, settings.request, hooks);
+  // A stream of unknown length keeps its summary's per-frame numbers in fixed memory.
+  const track::TrackingRun run =
+      app::run_track(prepared, *input.frames, settings.request, hooks, !known_length);
   if (show_progress) std::cerr << "\n";
   std::vector<std::string>& warnings = prepared.warnings;
   std::string figure_file;

@@ -231,10 +231,11 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
 }
 
 track::TrackingRun run_track(PreparedTrack& prepared, FrameSource& source, const TrackRequest& request,
-                             const pipeline::RunHooks& hooks) {
+                             const pipeline::RunHooks& hooks, bool bounded_memory) {
   pipeline::RunOptions run_options;
   run_options.method = request.method == "s2kf" ? pipeline::Method::s2kf : pipeline::Method::baseline;
   run_options.smooth = request.smooth;
+  run_options.bounded_memory = bounded_memory;
   track::TrackingRun run;
   const pipeline::Session& session = prepared.session;
   try {

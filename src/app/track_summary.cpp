@@ -25,11 +25,7 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
                              const track::StageTimes& outside) {
   // Converged where the running median over the next second falls below 1.5 times the
   // recording's median; the mean over every tracked frame is reported as well.
-  const long converged =
-      track::converged_frame(run.mean_marker_distance, track::frames_per_second(session.rate_hz));
-  const double level = converged >= 0 ? track::mean_from(run.mean_marker_distance, converged)
-                                      : std::numeric_limits<double>::quiet_NaN();
-  const double overall = track::mean_from(run.mean_marker_distance, 0);
+  const track::DistanceLevel distance = track::distance_level(run, session.rate_hz);
   // The markers the set did not name, placed by their motion, and the labels left out.
   nlohmann::json inferred = nlohmann::json::array(), left_out = nlohmann::json::array();
   for (const markerset::CompletedMarker& m : choice.inferred)
@@ -60,8 +56,6 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
              if (std::isfinite(sd[m])) noise[session.model.markers[m].name] = sd[m];
            return noise;
          }()}};
-  std::vector<double> latency_ms = run.seconds;
-  for (double& s : latency_ms) s *= 1000;
   // Per marker the tracker left out at least once: how often, and why (MarkerRejection).
   nlohmann::json rejected = nlohmann::json::array();
   for (std::size_t m = 0; m < run.rejected_by_innovation.size(); ++m)
@@ -118,11 +112,12 @@ nlohmann::json track_summary(const std::string& input, const std::string& method
       {"markers_used", markers_used},
       {"labels_ignored", session.mapping.ignored_labels},
       {"rejected_markers", rejected},
-      {"mean_marker_distance_mm", number_or_null(level)},
-      {"converged_frame", converged},
-      {"mean_marker_distance_all_frames_mm", number_or_null(overall)},
+      {"mean_marker_distance_mm", number_or_null(distance.level_mm)},
+      {"converged_frame", distance.converged_frame},
+      {"mean_marker_distance_all_frames_mm", number_or_null(distance.overall_mm)},
       {"latency_ms",
-       {{"median", track::quantile(latency_ms, 0.5)}, {"p99", track::quantile(latency_ms, 0.99)}}},
+       {{"median", 1000 * track::seconds_quantile(run, 0.5)},
+        {"p99", 1000 * track::seconds_quantile(run, 0.99)}}},
       {"seconds_per_stage", seconds_per_stage},
       {"samples", method == "s2kf" ? nlohmann::json(session.tracker.samples) : nlohmann::json(nullptr)},
       {"segments", segments},

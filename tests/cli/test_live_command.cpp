@@ -71,6 +71,12 @@ TEST(LiveCommand, SameJointAnglesAsTrackOnTheServedFile) {
   EXPECT_GE(summary["live"]["frames_received"].get<long>(), 300);
   // The frames after the first second; none waited behind the held second (the backlog is large).
   EXPECT_EQ(summary["live"]["latency_ms"]["frames"], 200);
+  // Median and p99 from the fixed-memory histogram, the max exact: in order, and the misses counted.
+  const nlohmann::json& latency = summary["live"]["latency_ms"];
+  EXPECT_GT(latency["median"].get<double>(), 0);
+  EXPECT_LE(latency["median"].get<double>(), latency["p99"].get<double>());
+  EXPECT_LE(latency["p99"].get<double>(), latency["max"].get<double>());
+  EXPECT_GE(latency["deadline_misses"].get<long>(), 0);
   EXPECT_EQ(summary["live"]["catch_up"]["frames"], 0);
   const auto expected = csv_rows(read_text(tracked + ".csv"));
   const auto got = csv_rows(read_text(live + ".csv"));

@@ -119,9 +119,11 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
                             const TrackRequest& request);
 
 /// Runs the prepared session over every frame (rows to `hooks.sink` when set, else kept in the
-/// run's motion table); refuses a run that tracked nothing or only predicted.
+/// run's motion table); refuses a run that tracked nothing or only predicted. `bounded_memory`: a
+/// stream of unknown length, whose per-frame series are kept for its first frames only
+/// (pipeline::RunOptions::bounded_memory).
 track::TrackingRun run_track(PreparedTrack& prepared, FrameSource& source, const TrackRequest& request,
-                             const pipeline::RunHooks& hooks = {});
+                             const pipeline::RunHooks& hooks = {}, bool bounded_memory = false);
 
 /// The summary of a run (PREFIX.json of `s2kf track`, `TrackResult.summary` in Python). With a
 /// truth, the accuracy of `motion` (the run's motion as written or kept) against it.

@@ -196,6 +196,10 @@ struct RunOptions {
   /// (TrackingSmoother::kBytesPerFrame each) and the rows go to the sink after the backward pass.
   bool smooth = false;
   bool keep_predicted_markers = false;  ///< track::TrackingRun::predicted_markers (evaluation)
+  /// A run of unbounded length (a stream): the per-frame series are kept for the first
+  /// track::kBoundedSeriesFrames frames (or the calibration's stretches, if longer) and the summary
+  /// takes the rest from their statistics, so memory stays flat (with a sink, without smoothing).
+  bool bounded_memory = false;
 };
 
 /// Hooks of a run, each optional.

@@ -180,11 +180,17 @@ S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& 
     };
   // The tracking stage is the tracker's own time per frame (hooks and bookkeeping apart).
   const auto with_times = [&](track::TrackingRun run) {
-    times.tracking = 0;
-    for (double seconds : run.seconds) times.tracking += seconds;
+    times.tracking = run.seconds_statistics.sum();  // every frame's, in order
     run.times = times;
     return run;
   };
+  // The calibration's distance (calibrated_distance_mm) needs the series over its stretches.
+  long series_limit = -1;
+  if (options.bounded_memory) {
+    series_limit = track::kBoundedSeriesFrames;
+    for (const auto& [start, length] : session.calibration_stretches)
+      series_limit = std::max(series_limit, static_cast<long>(start + length));
+  }
   const std::vector<std::string> joint_names = session.model.joint_names();
   // Joints no marker informs are written as NaN: the filter's value there is the prior's, not a
   // measurement.
@@ -206,16 +212,18 @@ S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& 
   };
   if (options.method == Method::baseline) {
     track::GradientBaseline baseline(session.model, session.mapping);
-    track::TrackingRun run = track::run_tracking(baseline, next_frame, session.rate_hz, joint_names,
-                                                 options.keep_predicted_markers, hooks.on_frame, sink);
+    track::TrackingRun run =
+        track::run_tracking(baseline, next_frame, session.rate_hz, joint_names,
+                            options.keep_predicted_markers, hooks.on_frame, sink, series_limit);
     blank_table(run);
     run.segments = observed;
     return with_times(std::move(run));
   }
   track::Tracker tracker(session.model, session.mapping, session.tracker, session.rate_hz, samples);
   if (!options.smooth) {
-    track::TrackingRun run = track::run_tracking(tracker, next_frame, session.rate_hz, joint_names,
-                                                 options.keep_predicted_markers, hooks.on_frame, sink);
+    track::TrackingRun run =
+        track::run_tracking(tracker, next_frame, session.rate_hz, joint_names, options.keep_predicted_markers,
+                            hooks.on_frame, sink, series_limit);
     blank_table(run);
     run.segments = observed;
     warn_about_rejected_markers(session.model, run);

@@ -27,17 +27,16 @@ inline long frames_per_second(double rate_hz) {
   return std::isfinite(rate_hz) && rate_hz >= 1 ? std::lround(rate_hz) : 1L;
 }
 
-/// The first frame at which the filter has converged: the first measured frame from which the
-/// running median of the distance over the next `window` frames (one second, frames_per_second;
-/// fewer at the end) falls below `factor` times the median over the whole recording. NaN frames
-/// (untracked, without markers) are left out of both medians. A late fast phase does not move it:
-/// the rule looks forward from the start, it does not restart. -1 when no frame qualifies.
-inline long converged_frame(const std::vector<double>& distance, long window, double factor = 1.5) {
-  const double threshold = factor * quantile(distance, 0.5);
+/// converged_frame's search with the threshold given (factor times a median known otherwise), over
+/// the first `starts` frames (-1: all of them).
+inline long converged_frame_below(const std::vector<double>& distance, long window, double threshold,
+                                  long starts = -1) {
   if (!std::isfinite(threshold)) return -1;
   const std::size_t width = static_cast<std::size_t>(std::max(1L, window));
+  const std::size_t end =
+      starts < 0 ? distance.size() : std::min(distance.size(), static_cast<std::size_t>(starts));
   std::vector<double> ahead;
-  for (std::size_t f = 0; f < distance.size(); ++f) {
+  for (std::size_t f = 0; f < end; ++f) {
     if (!std::isfinite(distance[f])) continue;
     ahead.clear();
     for (std::size_t k = f; k < std::min(distance.size(), f + width); ++k)
@@ -45,6 +44,15 @@ inline long converged_frame(const std::vector<double>& distance, long window, do
     if (quantile(ahead, 0.5) < threshold) return static_cast<long>(f);
   }
   return -1;
+}
+
+/// The first frame at which the filter has converged: the first measured frame from which the
+/// running median of the distance over the next `window` frames (one second, frames_per_second;
+/// fewer at the end) falls below `factor` times the median over the whole recording. NaN frames
+/// (untracked, without markers) are left out of both medians. A late fast phase does not move it:
+/// the rule looks forward from the start, it does not restart. -1 when no frame qualifies.
+inline long converged_frame(const std::vector<double>& distance, long window, double factor = 1.5) {
+  return converged_frame_below(distance, window, factor * quantile(distance, 0.5));
 }
 
 /// Mean of the finite values from `from` on.
