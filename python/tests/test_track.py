@@ -133,6 +133,26 @@ def test_a_known_marker_set_can_be_forced(data_dir):
     assert len(result.summary["markers_inferred"]) > 0
 
 
+def test_a_recording_of_no_whole_body_is_refused_in_python_words(cli, tmp_path):
+    """Ten markers on the head and four on the shoulders, labels no set names (as the program's test
+    ARecordingOfNoWholeBodyIsRefusedUnlessForced): refused, and the sentence names the keywords that
+    give a set or force it, not the program's options."""
+    face = tmp_path / "face.json"
+    like = ["LFHD", "RFHD", "LBHD", "RBHD"]
+    markers = [{"label": f"F{i}", "like": like[i]} for i in range(4)]
+    offsets = [("LFHD", [30, 15, -30]), ("LFHD", [-5, 5, -50]), ("RFHD", [5, 5, -50]), ("LFHD", [30, 25, -70]),
+               ("LFHD", [-15, -40, -30]), ("RFHD", [15, -40, -30])]
+    markers += [{"label": f"F{4 + i}", "like": m, "offset": o} for i, (m, o) in enumerate(offsets)]
+    markers += [{"label": f"T{i}", "like": m} for i, m in enumerate(["C7", "CLAV", "LSHO", "RSHO"])]
+    face.write_text(json.dumps({"name": "face", "reference_height_mm": 1000, "markers": markers}))
+    recording = tmp_path / "face.c3d"
+    cli("simulate", "--motion", "random_sweep", "--frames", 400, "--seed", 5, "--markerset", face, "--out", recording)
+    with pytest.raises(ValueError, match=r"does not look like a whole body.*\(give a marker set with markerset=\.\.\., "
+                                         r"or track it anyway with force=True\)$") as refused:
+        s2kf.track(str(recording), samples=101)
+    assert "--" not in str(refused.value)
+
+
 def test_bad_recordings_are_python_errors(tmp_path, data_dir):
     labels, rate, points = s2kf.read_c3d(str(data_dir / "walk.c3d"))
     with pytest.raises(ValueError, match=r"points must have shape \(F, P, 3\) with P = 50 labels, got \(551, 50\)"):

@@ -54,6 +54,12 @@ std::string option_name(const TrackRequest& request, const std::string& dashed) 
   return name;
 }
 
+std::string not_a_body_remedy(const TrackRequest& request) {
+  return request.names == OptionNames::program
+             ? "give a marker set with --markerset, or track it anyway with --force"
+             : "give a marker set with markerset=..., or track it anyway with force=True";
+}
+
 void check_request(const TrackRequest& r) {
   const auto name = [&](const std::string& dashed) { return option_name(r, dashed); };
   if (r.samples < 3 || r.samples > 100001)
@@ -190,7 +196,8 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
     }
   } else if (recording.readable_file) {
     prepared.choice = choose_or_infer_marker_set(input, source.labels(), request.markerset, request.subject,
-                                                 recording.inferred_markerset_path, request.force);
+                                                 recording.inferred_markerset_path, request.force,
+                                                 not_a_body_remedy(request));
   } else {
     prepared.choice = choose_marker_set_for(source.labels(), request.markerset, request.subject);
   }
@@ -305,8 +312,9 @@ std::optional<MarkerSetChoice> completed_set_for_static_trial(const TrackRequest
   } catch (const std::exception& e) {
     throw UserError(e.what());
   }
-  MarkerSetChoice choice = choose_or_infer_marker_set(recording_path, labels, request.markerset, "",
-                                                      completed_path, request.force);
+  MarkerSetChoice choice =
+      choose_or_infer_marker_set(recording_path, labels, request.markerset, "", completed_path, request.force,
+                                 not_a_body_remedy(request));
   if (choice.inferred.empty()) return std::nullopt;
   return choice;
 }

@@ -314,6 +314,10 @@ TEST(MixedMarkerSets, ARecordingOfNoWholeBodyIsRefusedUnlessForced) {
       run_command("track " + file + " --out " + prefix + " --samples 101 --formats csv");
   EXPECT_EQ(status, 1) << output;
   EXPECT_NE(output.find("does not look like a whole body"), std::string::npos) << output;
+  // The remedy in the program's words (Python's module says markerset=... and force=True).
+  EXPECT_NE(output.find("give a marker set with --markerset, or track it anyway with --force)"),
+            std::string::npos)
+      << output;
   EXPECT_FALSE(fs::exists(prefix + ".json"));
   EXPECT_FALSE(fs::exists(prefix + "_markerset.json"));
   const auto [forced, forced_output] =

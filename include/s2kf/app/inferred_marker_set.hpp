@@ -133,11 +133,13 @@ inline void complete_choice(const std::string& input, MarkerSetChoice& choice,
 /// choose_marker_set_for, completed with the labels the chosen set does not name (complete_choice);
 /// when neither option names a set and no bundled set fits the labels, a set inferred from the
 /// recording itself, written to `inferred_path` (unless empty), refused where it does not look like a whole
-/// body unless `force`; the choice's source says what was done. A subject file is used as it is.
+/// body unless `force`, with a sentence that ends in `remedy` (the front end's way to give a set or
+/// force it); the choice's source says what was done. A subject file is used as it is.
 inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
                                                   const std::vector<std::string>& labels,
                                                   const std::string& markerset, const std::string& subject,
-                                                  const std::string& inferred_path, bool force = false) {
+                                                  const std::string& inferred_path, bool force,
+                                                  const std::string& remedy) {
   if (!subject.empty()) return choose_marker_set_for(labels, markerset, subject);
   const auto completed = [&](MarkerSetChoice choice) {
     // Only a file can be read again (not a live source, HOST:PORT): there the labels stay ignored.
@@ -172,9 +174,8 @@ inline MarkerSetChoice choose_or_infer_marker_set(const std::string& input,
     throw UserError(input + ": " + bundled_problem + ", and " + why);
   }
   if (!not_a_body.empty())
-    throw UserError(
-        input + ": " + bundled_problem + ", and in the set inferred from its motion " + not_a_body +
-        "; nothing is tracked (give a marker set with --markerset, or track it anyway with --force)");
+    throw UserError(input + ": " + bundled_problem + ", and in the set inferred from its motion " +
+                    not_a_body + "; nothing is tracked (" + remedy + ")");
   MarkerSetChoice choice;
   choice.set = inferred.set;
   choice.source =

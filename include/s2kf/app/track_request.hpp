@@ -73,6 +73,10 @@ struct TrackRequest {
 /// `dashed` ("static-sd") as the request's front end spells it: "--static-sd" or "static_sd".
 std::string option_name(const TrackRequest& request, const std::string& dashed);
 
+/// How a recording refused as no whole body (choose_or_infer_marker_set) is tracked all the same,
+/// in the front end's words: the program's options or Python's keywords.
+std::string not_a_body_remedy(const TrackRequest& request);
+
 /// Frames left out of the accuracy against the truth (the filter's start-up).
 inline constexpr long kTruthWarmupFrames = 20;
 
