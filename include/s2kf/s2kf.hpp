@@ -73,6 +73,7 @@
 #include <s2kf/geometry/rigid_fit.hpp>
 
 #include <s2kf/track/gradient_baseline.hpp>
+#include <s2kf/track/quantile_histogram.hpp>
 #include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/stage_times.hpp>
 #include <s2kf/track/state_chart.hpp>
