@@ -121,4 +121,14 @@ TEST(TrackRequest, SessionOptionsCarryTheRequest) {
   EXPECT_THROW(s2kf::app::tracker_options(request, 100.0), UserError);
 }
 
+TEST(TrackRequest, TheNoBodyRemedyIsInTheFrontEndsWords) {
+  TrackRequest request;
+  EXPECT_EQ(s2kf::app::not_a_body_remedy(request),
+            "give a marker set with --markerset, or track it anyway with --force");
+  request.names = OptionNames::python;
+  const std::string python = s2kf::app::not_a_body_remedy(request);
+  EXPECT_EQ(python, "give a marker set with markerset=..., or track it anyway with force=True");
+  EXPECT_EQ(python.find("--"), std::string::npos);
+}
+
 }  // namespace
