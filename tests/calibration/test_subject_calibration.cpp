@@ -289,6 +289,18 @@ TEST(SubjectCalibration, AdjustsTheSubjectAtGivenPoses) {
                std::invalid_argument);
 }
 
+// Three seconds standing still in the model's zero pose, the root 530 mm up (a static trial).
+sim::KeyframeMotion standing_still(int joint_count) {
+  sim::KeyframeMotion still;
+  still.name = "static";
+  still.times = {0.0, 3.0};
+  still.root_positions = Eigen::Matrix3Xd::Zero(3, 2);
+  still.root_positions.row(2).setConstant(530);
+  still.root_rpy = Eigen::Matrix3Xd::Zero(3, 2);
+  still.joints = Eigen::MatrixXd::Zero(joint_count, 2);
+  return still;
+}
+
 // A static trial in the model's zero pose fixes the gauges, the markers' placement about the joints
 // that no recording tells from a constant offset of the joint angles (a foot's markers turned about
 // its ankle, a hand's about the wrist): with the posture's prior (static_pose_sd_rad) the offsets
@@ -302,13 +314,7 @@ TEST(SubjectCalibration, AStaticTrialFixesTheGauges) {
   subject_options.soft_tissue_mm = 0;
   subject_options.segment_scale_sd = 0;
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), subject_options, 7);
-  sim::KeyframeMotion still;
-  still.name = "static";
-  still.times = {0.0, 3.0};
-  still.root_positions = Eigen::Matrix3Xd::Zero(3, 2);
-  still.root_positions.row(2).setConstant(530);
-  still.root_rpy = Eigen::Matrix3Xd::Zero(3, 2);
-  still.joints = Eigen::MatrixXd::Zero(subject.model.joint_count(), 2);
+  const sim::KeyframeMotion still = standing_still(subject.model.joint_count());
   sim::RecordingOptions recording_options;
   recording_options.frames = 300;
   const sim::Recording recording = sim::simulate_recording(still, subject, recording_options, 7);
@@ -353,13 +359,7 @@ TEST(SubjectCalibration, AStaticTrialOffTheReferencePoseIsEstimated) {
   subject_options.segment_scale_sd = 0;
   const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), subject_options, 11);
   const double sd_rad = 3.0 * kPi / 180.0;
-  sim::KeyframeMotion still;
-  still.name = "static";
-  still.times = {0.0, 3.0};
-  still.root_positions = Eigen::Matrix3Xd::Zero(3, 2);
-  still.root_positions.row(2).setConstant(530);
-  still.root_rpy = Eigen::Matrix3Xd::Zero(3, 2);
-  still.joints = Eigen::MatrixXd::Zero(subject.model.joint_count(), 2);
+  sim::KeyframeMotion still = standing_still(subject.model.joint_count());
   std::mt19937_64 draw(11);
   std::normal_distribution<double> off(0.0, sd_rad);
   for (int j = 0; j < subject.model.joint_count(); ++j) {
