@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -289,6 +290,15 @@ TEST(SubjectCalibration, AdjustsTheSubjectAtGivenPoses) {
                std::invalid_argument);
 }
 
+// A subject whose markers are only misplaced: no soft tissue and the model's bone lengths (a static
+// pose cannot tell them from the offsets of the markers beyond each joint).
+sim::Subject placement_only_subject(std::uint64_t seed) {
+  sim::SubjectOptions options;
+  options.soft_tissue_mm = 0;
+  options.segment_scale_sd = 0;
+  return sim::make_subject(body::mmm_body_model(1750), options, seed);
+}
+
 // Three seconds standing still in the model's zero pose, the root 530 mm up (a static trial).
 sim::KeyframeMotion standing_still(int joint_count) {
   sim::KeyframeMotion still;
@@ -310,10 +320,7 @@ sim::KeyframeMotion standing_still(int joint_count) {
 // joint).
 TEST(SubjectCalibration, AStaticTrialFixesTheGauges) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  sim::SubjectOptions subject_options;
-  subject_options.soft_tissue_mm = 0;
-  subject_options.segment_scale_sd = 0;
-  const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), subject_options, 7);
+  const sim::Subject subject = placement_only_subject(7);
   const sim::KeyframeMotion still = standing_still(subject.model.joint_count());
   sim::RecordingOptions recording_options;
   recording_options.frames = 300;
@@ -354,10 +361,7 @@ TEST(SubjectCalibration, AStaticTrialFixesTheGauges) {
 // posture at the reference, or left every gauge to the marker set, fails these checks.
 TEST(SubjectCalibration, AStaticTrialOffTheReferencePoseIsEstimated) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  sim::SubjectOptions subject_options;
-  subject_options.soft_tissue_mm = 0;
-  subject_options.segment_scale_sd = 0;
-  const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), subject_options, 11);
+  const sim::Subject subject = placement_only_subject(11);
   const double sd_rad = 3.0 * kPi / 180.0;
   sim::KeyframeMotion still = standing_still(subject.model.joint_count());
   std::mt19937_64 draw(11);
