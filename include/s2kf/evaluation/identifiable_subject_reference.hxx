@@ -5,7 +5,7 @@
 
 #include <s2kf/evaluation/identifiable_subject_reference.hpp>
 
-#include <s2kf/calibration/bundle_adjustment.hxx>
+#include <s2kf/calibration/subject_information.hpp>
 
 namespace s2kf::evaluation {
 S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nominal,
@@ -27,24 +27,22 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
   options.validate();
   body::MarkerMapping mapping;
   for (int m = 0; m < truth.marker_count(); ++m) mapping.point_of_marker.push_back(m);
-  calibration::detail::BundleAdjustment adjustment(nominal, mapping, recording, options,
-                                                   marker_noise_mm * marker_noise_mm);
-
-  // The calibration frames at their true poses, each with its visible markers.
+  // The calibration frames at their true poses.
   std::vector<std::pair<long, body::Pose>> poses;
   for (long k : frames) {
     if (k < 0 || k >= recording.frames())
       throw std::invalid_argument("identifiable_subject: a calibration frame lies outside the recording");
     poses.emplace_back(k, recording.truth[static_cast<std::size_t>(k)]);
   }
-  std::vector<calibration::detail::BundleFrame> adjusted = calibration::detail::frames_at_poses(
-      mapping, recording, adjustment.used(), poses, truth.joint_count(), false);
-  if (adjusted.empty())
+  const calibration::SubjectInformation information =
+      calibration::subject_information(nominal, truth, mapping, recording, poses, options,
+                                       marker_noise_mm * marker_noise_mm, prior_only_fraction);
+  if (information.frames_used == 0)
     throw std::invalid_argument("identifiable_subject: no calibration frame shows 3 markers");
 
   // The nominal in the adjustment's unknowns at the true subject: length factors (nominal bone
   // over true bone, least squares over the segment's bones, minus 1) and offsets (nominal - true).
-  const std::vector<std::string>& segments = adjustment.segments();
+  const std::vector<std::string>& segments = information.segments;
   const int scales = static_cast<int>(segments.size());
   Eigen::VectorXd nominal_step(scales + 3 * truth.marker_count());
   for (int s = 0; s < scales; ++s) {
@@ -62,17 +60,16 @@ S2KF_INLINE IdentifiableSubject identifiable_subject(const body::BodyModel& nomi
                                               truth.markers[static_cast<std::size_t>(m)].offset;
 
   // Reset: the part of that step along the undetermined eigenvectors, in the priors' metric.
-  Eigen::VectorXd prior_sd;
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(
-      adjustment.information_in_prior_metric(truth, adjusted, prior_sd));
+  const Eigen::VectorXd& prior_sd = information.prior_sd;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information.information);
   if (eigen.info() != Eigen::Success)
     throw std::runtime_error("identifiable_subject: the eigen-decomposition did not converge");
   const Eigen::VectorXd whitened_step = nominal_step.cwiseQuotient(prior_sd);
   Eigen::VectorXd reset = Eigen::VectorXd::Zero(whitened_step.size());
   IdentifiableSubject result;
   result.information_ratios = eigen.eigenvalues();
-  result.frames_used = static_cast<long>(adjusted.size());
-  result.threshold = adjustment.prior_only_threshold(prior_only_fraction, adjusted.size());
+  result.frames_used = information.frames_used;
+  result.threshold = information.threshold;
   for (Eigen::Index i = 0; i < eigen.eigenvalues().size(); ++i) {
     if (eigen.eigenvalues()(i) >= result.threshold) continue;
     const auto v = eigen.eigenvectors().col(i);
