@@ -247,7 +247,11 @@ TEST(LiveFeed, FramesArrivingWhileTheHeldStretchIsTrackedAreKept) {
   LiveFrameSource source(feed, {});
   ASSERT_EQ(source.hold_first(60).frame_count(), 60);
   EXPECT_TRUE(feed.catching_up());
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the whole recording has been sent
+  // Until the whole recording has arrived (at 500 Hz about 0.2 s; longer on a busy machine).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (feed.counts().received < 100 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_EQ(feed.counts().received, 100);
   const std::vector<MarkerFrame> frames = read_all(source);
   EXPECT_FALSE(feed.catching_up());
   ASSERT_EQ(frames.size(), 100u);
