@@ -58,6 +58,15 @@ struct ServerThread {
   std::thread thread;
 };
 
+/// Waits until `feed` has received `frames` frames (the server's pace is the machine's: a fixed
+/// sleep fails on a busy one), for at most 20 s.
+void wait_until_received(const LiveFeed& feed, long frames) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (feed.counts().received < frames && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_EQ(feed.counts().received, frames);
+}
+
 /// Every frame the source gives, until it ends.
 std::vector<MarkerFrame> read_all(LiveFrameSource& source) {
   std::vector<MarkerFrame> frames;
@@ -230,7 +239,7 @@ TEST(LiveFeed, SlowConsumerKeepsTheNewestWithinTheBacklog) {
   const MarkerSequence sequence = numbered_frames(100, 5, 2000);
   ServerThread server(sequence, {});
   LiveFeed feed("127.0.0.1", server.port(), quiet_feed(3));
-  std::this_thread::sleep_for(std::chrono::milliseconds(1000));  // the whole recording has been sent
+  ASSERT_NO_FATAL_FAILURE(wait_until_received(feed, 100));  // the whole recording, none taken yet
   std::vector<std::uint32_t> numbers;
   LiveFrame frame;
   while (feed.next(frame, 2000) == LiveFeed::Next::frame) numbers.push_back(frame.number);
@@ -247,11 +256,8 @@ TEST(LiveFeed, FramesArrivingWhileTheHeldStretchIsTrackedAreKept) {
   LiveFrameSource source(feed, {});
   ASSERT_EQ(source.hold_first(60).frame_count(), 60);
   EXPECT_TRUE(feed.catching_up());
-  // Until the whole recording has arrived (at 500 Hz about 0.2 s; longer on a busy machine).
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (feed.counts().received < 100 && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  ASSERT_EQ(feed.counts().received, 100);
+  ASSERT_NO_FATAL_FAILURE(
+      wait_until_received(feed, 100));  // the whole recording (at 500 Hz 0.2 s, longer on a busy machine)
   const std::vector<MarkerFrame> frames = read_all(source);
   EXPECT_FALSE(feed.catching_up());
   ASSERT_EQ(frames.size(), 100u);
