@@ -776,6 +776,103 @@ int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::ve
   return moved;
 }
 
+/// Two clusters on one segment whose mutual distances vary clearly more than each one's own
+/// (median SD over this multiple of the mean of theirs) ride on two segments with a joint between.
+inline constexpr double kSplitClusterRatio = 1.5;
+
+/// The median distance SD (mm) between the markers of `x` and `y`, or within `x` where they are
+/// the same cluster; NaN where no pair was seen together often enough.
+inline double cluster_distance_sd(const InferenceContext& c, const MarkerCluster& x, const MarkerCluster& y) {
+  std::vector<double> sd;
+  for (std::size_t i : x.members)
+    for (std::size_t j : y.members) {
+      if (&x == &y && j <= i) continue;
+      const double d = c.clusters.distance_sd(c.points[i], c.points[j]);
+      if (std::isfinite(d)) sd.push_back(d);
+    }
+  if (sd.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::nth_element(sd.begin(), sd.begin() + static_cast<std::ptrdiff_t>(sd.size() / 2), sd.end());
+  return sd[sd.size() / 2];
+}
+
+/// After the clusters are placed: two clusters that share a segment but not its rigidity
+/// (kSplitClusterRatio) are on two segments. Where a segment next to theirs carries no marker,
+/// the motion could not place either there (an empty segment's tracked motion is the prior's), so
+/// the cluster nearer the joint to it goes there (a foot cluster below the shank's, renamed
+/// beyond what the cluster-model names say). Returns the markers moved; `notes` as
+/// place_clusters_as_units.
+template <class Place>
+int split_clusters_sharing_a_segment(const InferenceContext& c, Attempt& a,
+                                     const std::vector<MarkerCluster>& clusters, const Place& place,
+                                     std::map<std::string, std::string>& notes) {
+  const auto segment_of = [&](std::size_t i) { return body::segment_of_frame(c.base, a.frame_of[i]); };
+  const auto on_one_segment = [&](const MarkerCluster& k) {
+    for (std::size_t i : k.members)
+      if (segment_of(i) != segment_of(k.members.front())) return false;
+    return true;
+  };
+  const auto carries_markers = [&](const std::string& segment) {
+    for (std::size_t i = 0; i < c.points.size(); ++i)
+      if (segment_of(i) == segment) return true;
+    return false;
+  };
+  // Mean distance (tracked mm) of a cluster's markers from the origin of `frame`.
+  const auto distance_from = [&](const MarkerCluster& k, int frame) {
+    double sum = 0;
+    int count = 0;
+    for (std::size_t i : k.members)
+      if (std::isfinite(a.spread.spread(static_cast<Eigen::Index>(i), frame)))
+        sum += a.spread.mean[i][static_cast<std::size_t>(frame)].norm(), ++count;
+    return count ? sum / count : std::numeric_limits<double>::infinity();
+  };
+  int moved = 0;
+  for (std::size_t x = 0; x < clusters.size(); ++x)
+    for (std::size_t y = x + 1; y < clusters.size(); ++y) {
+      const MarkerCluster &cx = clusters[x], &cy = clusters[y];
+      const std::string shared = segment_of(cx.members.front());
+      if (!on_one_segment(cx) || !on_one_segment(cy) || segment_of(cy.members.front()) != shared) continue;
+      const double across = cluster_distance_sd(c, cx, cy);
+      const double own = 0.5 * (cluster_distance_sd(c, cx, cx) + cluster_distance_sd(c, cy, cy));
+      if (!(across > kSplitClusterRatio * own)) continue;
+      const MarkerCluster* nearer = nullptr;
+      std::string target;
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const std::string& empty : adjacent_segments(c.base, shared)) {
+        if (carries_markers(empty)) continue;
+        // The joint between them is the child's origin.
+        bool child = false;
+        for (const body::Joint& joint : c.base.joints)
+          if (joint.group == empty && body::segment_of_frame(c.base, joint.parent_frame) == shared)
+            child = true;
+        const int joint_frame = c.base.frame_index(child ? empty : shared);
+        for (const MarkerCluster* k : {&cx, &cy})
+          if (const double d = distance_from(*k, joint_frame); d < nearest)
+            nearest = d, nearer = k, target = empty;
+      }
+      if (!nearer) continue;
+      for (std::size_t i : nearer->members) {
+        int frame = c.base.frame_index(target);
+        double best = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < c.base.frame_count(); ++k)
+          if (body::segment_of_frame(c.base, k) == target &&
+              a.spread.spread(static_cast<Eigen::Index>(i), k) < best)
+            frame = k, best = a.spread.spread(static_cast<Eigen::Index>(i), k);
+        a.frame_of[i] = frame;
+        place(i, frame);
+        ++moved;
+      }
+      const MarkerCluster& other = nearer == &cx ? cy : cx;
+      std::ostringstream note;
+      note << nearer->stem << "* on " << target << ", not " << shared << " with " << other.stem
+           << "*: their mutual distances vary by " << std::lround(across) << " mm (median SD) against "
+           << std::lround(own) << " mm within each, so a joint lies between them, " << target << " next to "
+           << shared << " carried no marker, and " << nearer->stem
+           << "* is the nearer to that joint; no name says which: check it";
+      notes[nearer->stem] = note.str();
+    }
+  return moved;
+}
+
 /// Step 4: rounds of tracking and reassignment. A marker moves only to a neighbouring segment
 /// (its parent or a child): the template fit and the topology check placed it near its segment,
 /// and a distant segment can look rigid with it only where the tracking of both failed. A marker
@@ -845,6 +942,17 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
       place_point(c, a, i, a.spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / a.height));
     }
     moved += place_clusters_as_units(
+        c, a, clusters,
+        [&](std::size_t i, int frame) {
+          const bool measured = std::isfinite(a.spread.spread(static_cast<Eigen::Index>(i), frame));
+          if (from_motion(frame) && measured) a.standing[i].reset();
+          place_point(c, a, i,
+                      measured ? Eigen::Vector3d(a.spread.mean[i][static_cast<std::size_t>(frame)] *
+                                                 (1000.0 / a.height))
+                               : Eigen::Vector3d::Zero());
+        },
+        cluster_notes);
+    moved += split_clusters_sharing_a_segment(
         c, a, clusters,
         [&](std::size_t i, int frame) {
           const bool measured = std::isfinite(a.spread.spread(static_cast<Eigen::Index>(i), frame));
