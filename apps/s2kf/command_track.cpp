@@ -172,8 +172,9 @@ const RegisterCommand track_registration{
                      "a-pose or a pose CSV (its first row); default: the one nearest the tracked posture");
       app.add_option("--static-posture", settings->request.static_posture,
                      "near (the posture held is estimated within --static-sd of the reference pose), "
-                     "exact (every frame within --static-sd of it) or auto (exact where markers the set "
-                     "does not name were placed by their motion, else near)")
+                     "exact (every frame within --static-sd of it) or auto (exact, within 0.5 degrees or "
+                     "--static-sd if less, where markers the set does not name were placed by their "
+                     "motion, else near)")
           ->check(CLI::IsMember({"auto", "near", "exact"}));
       app.add_flag("--static-refine", settings->request.static_refine,
                    "with --static: calibrate again on each recording, starting from the static trial's "

@@ -187,8 +187,10 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
     prepared.choice.source = "calibrated on the static trial " + request.static_trial;
     if (completed && request.static_posture == "auto")
       prepared.choice.source +=
-          " with the posture held exactly (markers were placed by their motion, and "
-          "only the pose held gives their segments the zero of the joint angles)";
+          " with the posture held exactly, within " +
+          number_text(std::min(request.static_sd_deg, kPlacedMarkersStaticSdDeg)) +
+          " deg (markers were placed by their motion, and only the pose held gives their segments "
+          "the zero of the joint angles)";
     if (completed) {
       prepared.choice.source += "; " + completed->source;
       prepared.choice.inferred = completed->inferred;
@@ -297,8 +299,12 @@ CalibratedSubject calibrate_static_trial(const TrackRequest& request, const Samp
                                          const std::string& name, const body::MarkerSet* set) {
   SubjectSettings settings = static_trial_settings(request);
   if (set) settings.set = *set;
-  // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held.
-  if (set && request.static_posture == "auto") settings.static_posture = "exact";
+  // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held:
+  // held exactly and tightly, or the posture trades with their offsets (docs/marker-sets.md).
+  if (set && request.static_posture == "auto") {
+    settings.static_posture = "exact";
+    settings.static_sd_deg = std::min(settings.static_sd_deg, kPlacedMarkersStaticSdDeg);
+  }
   return calibrate_subject_file(request.static_trial, option_name(request, "static"), settings, samples,
                                 name);
 }

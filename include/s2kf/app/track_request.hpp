@@ -31,6 +31,11 @@ inline const track::TrackerOptions kDefaultTracker{};
 /// keywords ("static_sd").
 enum class OptionNames { program, python };
 
+/// The SD (degrees) within which static_posture "auto" holds a static trial's posture to the
+/// reference pose where markers were placed by their motion (at most static_sd_deg): looser, the
+/// posture trades with their offsets (the cluster model's knees 0.5-0.9 deg worse on squats).
+inline constexpr double kPlacedMarkersStaticSdDeg = 0.5;
+
 struct TrackRequest {
   // The marker set: at most one of markerset, subject, static_trial.
   std::string markerset;       ///< a bundled set's name or a .json file; empty: the best bundled match
@@ -41,8 +46,9 @@ struct TrackRequest {
   /// (its first row); empty: the reference pose nearest the tracked posture.
   std::string static_pose;
   /// "near": the posture held is estimated within static_sd_deg of the reference pose; "exact":
-  /// every frame's angles within static_sd_deg of it; "auto": exact where markers the set does not
-  /// name were placed by their motion (a cluster's zero comes from the pose held alone), else near.
+  /// every frame's angles within static_sd_deg of it; "auto": exact, within
+  /// kPlacedMarkersStaticSdDeg, where markers the set does not name were placed by their motion (a
+  /// cluster's zero comes from the pose held alone), else near.
   std::string static_posture = "auto";
   bool static_refine = false;  ///< calibrate again on the recording, starting from the static trial's subject
   /// Without a static trial: a stretch of the recording in which the subject stands still in a
