@@ -79,7 +79,8 @@ void run_track(const TrackSettings& given) {
     for (std::size_t i = 0; i < todo.size(); ++i) std::cout << todo[i].input << " -> " << prefixes[i] << "\n";
     return;
   }
-  const std::string static_trial = request.static_trial;
+  // --static-refine: each recording is calibrated together with the static trial (app::prepare_track).
+  const std::string static_trial = request.static_refine ? std::string() : request.static_trial;
   if (!static_trial.empty()) {
     // One subject for every recording: PREFIX_subject.json beside one recording's outputs, else
     // STATIC-NAME_subject.json in the output folder. The recordings are then tracked with it as
@@ -90,16 +91,9 @@ void run_track(const TrackSettings& given) {
                                    : prefixes[0] + "_subject.json";
     std::optional<MarkerSetChoice> placed =
         calibrate_on_static_trial(settings, path, todo[0].input, prefixes[0] + "_markerset.json");
-    if (request.static_refine) {  // the subject as the marker set the recording is calibrated from
-      request.markerset = path;
-      request.subject.clear();
-      request.static_refine = false;
-      request.static_stretch = false;  // the static trial was given
-    } else {
-      request.subject = path;
-      request.markerset.clear();
-      settings.placed_for_static = std::move(placed);  // listed in each summary
-    }
+    request.subject = path;
+    request.markerset.clear();
+    settings.placed_for_static = std::move(placed);  // listed in each summary
     request.static_trial.clear();
   }
   if (!batch) {
@@ -177,9 +171,9 @@ const RegisterCommand track_registration{
                      "motion, else near)")
           ->check(CLI::IsMember({"auto", "near", "exact"}));
       app.add_flag("--static-refine", settings->request.static_refine,
-                   "with --static: calibrate again on each recording, starting from the static trial's "
-                   "subject (the motion corrects the joint centres; the directions it cannot see stay "
-                   "the static trial's)");  // without --static: app::check_request's sentence
+                   "with --static: calibrate the static trial and each recording together, in one bundle "
+                   "adjustment (the static trial fixes what no motion shows, the recording's bending "
+                   "joints the rest)");  // without --static: app::check_request's sentence
       app.add_flag("!--no-static-stretch", settings->request.static_stretch,
                    "without --static: do not take a stretch of the recording in which the subject stands "
                    "still (1 s or more) in a reference pose as its static trial (default: it is, and "

@@ -395,7 +395,7 @@ void bind_track(py::module_& module) {
       "from it, degrees; static_posture: 'near', the posture held estimated near the pose, 'exact', or "
       "'auto' (exact where "
       "markers were placed by their motion, else near); "
-      "static_refine: calibrate again on the recording from that subject); static_stretch: without "
+      "static_refine: calibrate the static trial and the recording together); static_stretch: without "
       "static, a stretch of the recording where the subject stands still in a reference pose is its "
       "static trial; calibrate: fit the subject's "
       "offsets and bone lengths on calibration_frames frames spread over the recording (calibration_samples: "

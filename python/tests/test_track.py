@@ -215,7 +215,7 @@ def test_the_static_keywords_are_the_programs(cli, tmp_path):
     static, walk = tmp_path / "static.c3d", tmp_path / "walk.c3d"
     cli("simulate", "--motion", "static", "--seed", "5", "--out", static)
     cli("simulate", "--motion", "walk", "--seed", "5", "--frames", "150", "--out", walk)
-    # Calibrated again on the walk from the static trial's subject, as `s2kf track --static-refine`.
+    # The static trial and the walk calibrated together, as `s2kf track --static-refine`.
     refined = s2kf.track(str(walk), static=str(static), static_refine=True)
     cli("track", walk, "--static", static, "--static-refine", "--quiet", "--formats", "csv",
         "--out", tmp_path / "cli")
@@ -230,7 +230,7 @@ def test_the_static_keywords_are_the_programs(cli, tmp_path):
     assert any("are a static trial in the zero pose" in m for m in still.summary["marker_set_messages"])
     plain = s2kf.track(str(static), static_stretch=False)
     assert not any("static trial" in m for m in plain.summary["marker_set_messages"])
-    with pytest.raises(ValueError, match="static_refine calibrates again .* it needs static"):
+    with pytest.raises(ValueError, match="static_refine calibrates the static trial and the recording together; it needs static"):
         s2kf.track(str(walk), static_refine=True)
     with pytest.raises(ValueError, match="static_posture must be 'auto', 'near' or 'exact'"):
         s2kf.track(str(walk), static=str(static), static_posture="close")

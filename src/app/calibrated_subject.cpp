@@ -18,6 +18,17 @@ namespace s2kf::app {
 
 namespace fs = std::filesystem;
 
+void apply_static_settings(const SubjectSettings& settings, calibration::CalibrationOptions& options) {
+  options.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
+  options.static_posture_estimated = settings.static_posture == "near";
+  const body::BodyModel base = body::mmm_body_model(1000);
+  if (settings.static_pose_name.empty())
+    for (const std::string& name : body::reference_pose_names())
+      options.static_pose_candidates.push_back(body::reference_pose(base, name));
+  else
+    options.static_pose = static_reference_pose(base, settings.static_pose_name, settings.static_pose_option);
+}
+
 CalibratedSubject calibrate_subject(FrameSource& source, const std::string& input,
                                     const SubjectSettings& settings, const SampleSet& samples,
                                     const std::string& name) {
@@ -36,17 +47,7 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
   options.calibration.estimate_segment_scales = !settings.no_scales;
   options.calibration.weak_direction_shrink = settings.shrink;
   options.noise_from_calibration = settings.noise_from_calibration;
-  if (settings.static_pose) {
-    options.calibration.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
-    options.calibration.static_posture_estimated = settings.static_posture == "near";
-    const body::BodyModel base = body::mmm_body_model(1000);
-    if (settings.static_pose_name.empty())
-      for (const std::string& name : body::reference_pose_names())
-        options.calibration.static_pose_candidates.push_back(body::reference_pose(base, name));
-    else
-      options.calibration.static_pose =
-          static_reference_pose(base, settings.static_pose_name, settings.static_pose_option);
-  }
+  if (settings.static_pose) apply_static_settings(settings, options.calibration);
   try {
     result.session = pipeline::prepare_session(source, result.choice.set, options, samples);
   } catch (const std::invalid_argument& e) {

@@ -106,7 +106,7 @@ void check_request(const TrackRequest& r) {
     throw UserError(name("static-posture") + " must be " + choices({"auto", "near", "exact"}) + ", not '" +
                     r.static_posture + "'");
   if (r.static_refine && r.static_trial.empty())
-    throw UserError(name("static-refine") + " calibrates again from the static trial's subject; it needs " +
+    throw UserError(name("static-refine") + " calibrates the static trial and the recording together; it needs " +
                     name("static"));
   if (!r.static_trial.empty() && !r.calibrate)
     throw UserError(name("static") +
@@ -172,7 +172,23 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
 
   pipeline::SessionOptions options = session_options(request, source.rate_hz());
   prepared.samples = cached_sample_set(46, request.samples);
-  if (!request.static_trial.empty()) {
+  if (!request.static_trial.empty() && request.static_refine) {
+    // The static trial and the recording calibrated together (one bundle adjustment from the
+    // marker set): the static frames fix the gauges, the moving ones what bending joints show.
+    prepared.choice = recording.readable_file
+                          ? choose_or_infer_marker_set(input, source.labels(), request.markerset, "",
+                                                       recording.inferred_markerset_path, request.force,
+                                                       not_a_body_remedy(request))
+                          : choose_marker_set_for(source.labels(), request.markerset, "");
+    SubjectSettings settings = static_trial_settings(request);
+    // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held.
+    if (!prepared.choice.inferred.empty() && request.static_posture == "auto")
+      settings.static_posture = "exact";
+    apply_static_settings(settings, options.calibration);
+    options.static_trial = read_static_trial(request);
+    options.calibration_may_fail = false;
+    prepared.choice.source += "; calibrated together with the static trial " + request.static_trial;
+  } else if (!request.static_trial.empty()) {
     // The subject calibrated on the static trial (`s2kf calibrate --static`), with the markers the
     // set does not name placed by the recording's motion first (a static trial shows none), then
     // the recording tracked with it as with a subject file, or calibrated again from it (static_refine).
@@ -285,6 +301,20 @@ nlohmann::json summarize_track(const PreparedTrack& prepared, const track::Track
     summary["truth"]["warmup_frames"] = kTruthWarmupFrames;
   }
   return summary;
+}
+
+MarkerSequence read_static_trial(const TrackRequest& request) {
+  const std::string what = option_name(request, "static");
+  try {
+    c3d::C3dFrameSource source(request.static_trial);
+    if (source.frame_count() == 0)
+      throw UserError(what + ": " + request.static_trial + " holds no complete frame");
+    return read_frames(source, 0, std::min<std::int64_t>(source.frame_count(), kStaticTrialMaxFrames));
+  } catch (const UserError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw UserError(what + ": " + e.what());
+  }
 }
 
 SubjectSettings static_trial_settings(const TrackRequest& request) {

@@ -114,6 +114,37 @@ TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
   EXPECT_EQ(messages("no_stretch", "--no-static-stretch").find("static trial"), std::string::npos);
 }
 
+// --static-refine calibrates the static trial and the recording together (one bundle adjustment):
+// the recording's summary says so, its calibration holds the frames of both, and a static trial
+// in a stance the calibration is told wrongly is refused as with --static alone, writing nothing.
+TEST(StaticTrialCommand, RefineCalibratesTheStaticTrialAndTheRecordingTogether) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
+  const std::string trial = t_pose_trial(dir);
+  const std::string walk = (dir / "walk.c3d").string();
+  const auto [simulated, simulate_output] =
+      test_support::run_command("simulate --motion walk --seed 5 --frames 200 --out " + walk);
+  ASSERT_EQ(simulated, 0) << simulate_output;
+  const auto [status, output] = test_support::run_command("track " + walk + " --static " + trial +
+                                                          " --static-refine --formats csv --quiet --out " +
+                                                          (dir / "joint").string());
+  ASSERT_EQ(status, 0) << output;
+  const nlohmann::json summary = read_json(dir / "joint.json");
+  std::string messages;
+  for (const auto& message : summary["marker_set_messages"]) messages += message.get<std::string>() + "\n";
+  EXPECT_NE(messages.find("calibrated together with the static trial " + trial), std::string::npos) << messages;
+  // The static trial's 301 frames come first, then the walk's 200.
+  EXPECT_EQ(summary["calibration"]["frames"].get<int>(), 501) << summary["calibration"].dump();
+  EXPECT_FALSE(fs::exists(dir / "joint_subject.json"));  // the subject is the recording's calibration
+
+  const auto [wrong, wrong_output] = test_support::run_command(
+      "track " + walk + " --static " + trial + " --static-refine --static-pose zero --static-posture exact " +
+      "--out " + (dir / "joint_wrong").string());
+  EXPECT_EQ(wrong, 1) << wrong_output;
+  EXPECT_NE(wrong_output.find("is not a person's"), std::string::npos) << wrong_output;
+  EXPECT_FALSE(fs::exists(dir / "joint_wrong.csv"));
+}
+
 TEST(StaticTrialCommand, AnUnknownPoseIsRefusedByName) {
   const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose_unknown";
   fs::create_directories(dir);

@@ -52,6 +52,10 @@ struct CalibratedSubject {
   std::vector<std::string> messages;  ///< which marker set and why, labels ignored
 };
 
+/// The calibration's static-trial options (its posture's SD, near or exact, the reference pose or
+/// the candidates to find it among) from `settings`.
+void apply_static_settings(const SubjectSettings& settings, calibration::CalibrationOptions& options);
+
 /// Calibrates the subject of the recording `source` (`input` names it in messages), with the
 /// tracker's `samples`; the subject is named `name`. Throws UserError naming the recording when
 /// the calibration cannot run (no height, too few markers).

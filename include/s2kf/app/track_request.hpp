@@ -50,7 +50,10 @@ struct TrackRequest {
   /// kPlacedMarkersStaticSdDeg, where markers the set does not name were placed by their motion (a
   /// cluster's zero comes from the pose held alone), else near.
   std::string static_posture = "auto";
-  bool static_refine = false;  ///< calibrate again on the recording, starting from the static trial's subject
+  /// Calibrate the static trial and the recording together (one bundle adjustment from the marker
+  /// set: the static frames with the posture's prior, the recording's without), instead of tracking
+  /// with the static trial's subject.
+  bool static_refine = false;
   /// Without a static trial: a stretch of the recording in which the subject stands still in a
   /// reference pose is its static trial, and the recording's calibration starts from it.
   bool static_stretch = true;
@@ -140,6 +143,13 @@ track::TrackingRun run_track(PreparedTrack& prepared, FrameSource& source, const
 nlohmann::json summarize_track(const PreparedTrack& prepared, const track::TrackingRun& run,
                                const TrackRequest& request, const io::MotionTable* motion = nullptr,
                                const track::StageTimes& outside = {});
+
+/// The frames of a static trial read at most (a static calibration uses as many; 20 s at 60 Hz).
+inline constexpr std::int64_t kStaticTrialMaxFrames = 1200;
+
+/// The request's static trial read into memory (its first kStaticTrialMaxFrames frames); a
+/// UserError naming the option when the file cannot be read or holds no frame.
+MarkerSequence read_static_trial(const TrackRequest& request);
 
 /// The settings of the request's static trial (or static stretch): its pose, SD and posture.
 SubjectSettings static_trial_settings(const TrackRequest& request);

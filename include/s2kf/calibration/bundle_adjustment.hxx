@@ -128,6 +128,21 @@ inline Eigen::VectorXd mean_joints(const std::vector<BundleFrame>& frames) {
   return frames.empty() ? sum : Eigen::VectorXd(sum / static_cast<double>(frames.size()));
 }
 
+/// Whether `frame` belongs to the static trial: every frame, or with options.static_frames > 0
+/// the recording's first static_frames.
+inline bool in_static_trial(const BundleFrame& frame, const CalibrationOptions& options) {
+  return options.static_frames == 0 || frame.index < options.static_frames;
+}
+
+/// The frames of the static trial (in_static_trial).
+inline std::vector<BundleFrame> static_trial_frames(const std::vector<BundleFrame>& frames,
+                                                    const CalibrationOptions& options) {
+  std::vector<BundleFrame> kept;
+  for (const BundleFrame& frame : frames)
+    if (in_static_trial(frame, options)) kept.push_back(frame);
+  return kept;
+}
+
 /// The static trial's reference pose: options.static_pose (the zero pose when empty), or of the
 /// candidates the one nearest (RMS over the joints) the tracked frames' mean posture; `choice` is
 /// its index, -1 for static_pose.
@@ -280,7 +295,7 @@ class BundleAdjustment {
                                               Eigen::VectorXd& prior_sd) {
     scale_weight_ = static_cast<double>(frames.size()) /
                     (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
-    pose_prior_frames_ = frames.size();
+    pose_prior_frames_ = posture_prior_frames(frames);
     NormalEquations normal;
     linearise_all(model, frames, normal);
     return whitened_information(normal, prior_sd);
@@ -292,7 +307,7 @@ class BundleAdjustment {
     // too, and would otherwise carry the weakly observed lengths (lumbar, trunk) far off.
     scale_weight_ = static_cast<double>(frames.size()) /
                     (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
-    pose_prior_frames_ = frames.size();
+    pose_prior_frames_ = posture_prior_frames(frames);
     const double before = cost(model, frames, cumulative_);
     long residuals = 0;
     for (const BundleFrame& frame : frames) residuals += static_cast<long>(frame.markers.size());
@@ -311,7 +326,19 @@ class BundleAdjustment {
       linearise_all(model, frames, normal);
       if (it == 0) {
         choose_estimated_directions(model, normal, frames.size(), pass);
-        choose_shrinkage(normal);
+        if (options_.static_frames > 0) {
+          // With a moving trial beside the static one, the shrinkage is measured against the static
+          // trial's information alone: the moving frames' would hold the gauges, which only the
+          // static trial's posture sees, at the marker set.
+          std::vector<BundleFrame> still;
+          for (const BundleFrame& frame : frames)
+            if (frame.prior_joints.size() > 0) still.push_back(frame);
+          NormalEquations static_normal;
+          linearise_all(model, still, static_normal);
+          choose_shrinkage(static_normal);
+        } else {
+          choose_shrinkage(normal);
+        }
         current = cost(model, frames, cumulative_);  // with the shrinkage chosen now
       }
       for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
@@ -385,6 +412,13 @@ class BundleAdjustment {
       sum += e.dot(shrink_ * e);
     }
     return sum;
+  }
+
+  /// The frames the posture's prior holds (those of the static trial); at least 1.
+  static std::size_t posture_prior_frames(const std::vector<BundleFrame>& frames) {
+    const auto count = std::count_if(frames.begin(), frames.end(),
+                                     [](const BundleFrame& frame) { return frame.prior_joints.size() > 0; });
+    return std::max<std::size_t>(static_cast<std::size_t>(count), 1);
   }
 
   /// Per frame; with static_posture_estimated the frames share one prior's weight.

@@ -105,6 +105,12 @@ struct CalibrationOptions {
   /// near the reference (traded against the offsets' prior) and their sway follows the markers.
   /// false: every frame's angles are held within the SD of the reference.
   bool static_posture_estimated = false;
+  /// > 0 (with static_pose_sd_rad > 0): only the recording's first static_frames frames are the
+  /// static trial and get the posture's prior; the frames after them are a moving trial of the
+  /// same subject, calibrated together with it (one bundle adjustment, the marker offsets and bone
+  /// lengths shared). The static frames fix the gauges, the moving ones what bending joints show
+  /// (the roll split of upper arm and forearm, the joint axes). 0: every frame is the static trial.
+  long static_frames = 0;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
   int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
   /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
@@ -137,6 +143,7 @@ struct CalibrationOptions {
       throw std::invalid_argument("calibration: the static pose has a non-finite angle");
     for (const Eigen::VectorXd& pose : static_pose_candidates)
       if (!pose.allFinite()) throw std::invalid_argument("calibration: a static pose has a non-finite angle");
+    if (static_frames < 0) throw std::invalid_argument("calibration: static_frames must be >= 0");
     if (skip_frames < 0 || stride < 1)
       throw std::invalid_argument("calibration: skip_frames >= 0 and stride >= 1");
     if (threads < 1) throw std::invalid_argument("calibration: at least 1 thread is needed");
@@ -199,8 +206,9 @@ SubjectCalibration calibrate_subject(const body::BodyModel& model, const body::M
 /// together with the poses on the frames `poses` names, each with every visible mapped marker
 /// (no outliers are left out). With the true poses of a simulated recording it shows what the
 /// calibration's objective reaches apart from the poses the tracker gives it. With
-/// options.static_pose_sd_rad > 0 every frame's joint angles get the static trial's prior at the
-/// zero pose, as in calibrate_subject. The result has the adjusted model, its length factors, its
+/// options.static_pose_sd_rad > 0 every frame's joint angles (the first options.static_frames'
+/// when that is > 0) get the static trial's prior at options.static_pose (the zero pose when
+/// empty), as in calibrate_subject. The result has the adjusted model, its length factors, its
 /// per-marker residuals and one pass; frames with fewer than 3 markers are skipped.
 SubjectCalibration adjust_subject_at_poses(const body::BodyModel& model, const body::MarkerMapping& mapping,
                                            const track::TrackerOptions& tracker_options,

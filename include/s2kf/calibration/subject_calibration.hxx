@@ -43,8 +43,11 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
       break;
     }
     if (frames.empty()) throw std::invalid_argument("calibration: no frame could be tracked");
+    if (round == 0 && options.static_pose_sd_rad > 0 && detail::static_trial_frames(frames, options).empty())
+      throw std::invalid_argument("calibration: no frame of the static trial could be tracked");
     if (round == 0 && options.static_pose_sd_rad > 0)
-      reference = detail::choose_static_pose(options, frames, model.joint_count(), result.static_pose_choice);
+      reference = detail::choose_static_pose(options, detail::static_trial_frames(frames, options),
+                                             model.joint_count(), result.static_pose_choice);
 
     // Inliers: observed residuals at the tracked poses within max(floor, 4 x median).
     std::vector<std::vector<double>> distances(frames.size());
@@ -74,7 +77,8 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
         else
           frames[k].markers.push_back(static_cast<int>(u));
       }
-      if (options.static_pose_sd_rad > 0) frames[k].prior_joints = reference;
+      if (options.static_pose_sd_rad > 0 && detail::in_static_trial(frames[k], options))
+        frames[k].prior_joints = reference;
       // A frame's pose is determined only with 3 or more markers.
       if (frames[k].markers.size() >= 3) kept.push_back(std::move(frames[k]));
     }
@@ -83,7 +87,8 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
     adjustment.adjust(result.model, kept, pass);
     result.passes.push_back(pass);
     result.marker_residual_rms_mm = detail::marker_residual_rms(result.model, mapping, recording, used, kept);
-    if (options.static_pose_sd_rad > 0) result.static_posture = detail::mean_joints(kept);
+    if (options.static_pose_sd_rad > 0)
+      result.static_posture = detail::mean_joints(detail::static_trial_frames(kept, options));
   }
   result.segment_scale = adjustment.segment_scale();
   result.mean_marker_distance_before_mm = result.passes.front().mean_marker_distance_mm;
@@ -108,6 +113,8 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
       detail::frames_at_poses(mapping, recording, used, poses, model.joint_count(),
                               options.static_pose_sd_rad > 0, options.static_pose);
   if (frames.empty()) throw std::invalid_argument("calibration: no posed frame shows 3 or more markers");
+  for (detail::BundleFrame& frame : frames)  // a moving trial calibrated with the static one: no prior
+    if (!detail::in_static_trial(frame, options)) frame.prior_joints.resize(0);
   SubjectCalibration result;
   result.model = model;
   CalibrationPass pass;
@@ -115,7 +122,8 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
   adjustment.adjust(result.model, frames, pass);
   result.passes.push_back(pass);
   result.marker_residual_rms_mm = detail::marker_residual_rms(result.model, mapping, recording, used, frames);
-  if (options.static_pose_sd_rad > 0) result.static_posture = detail::mean_joints(frames);
+  if (options.static_pose_sd_rad > 0)
+    result.static_posture = detail::mean_joints(detail::static_trial_frames(frames, options));
   result.segment_scale = adjustment.segment_scale();
   result.mean_marker_distance_before_mm = std::numeric_limits<double>::quiet_NaN();
   return result;

@@ -84,6 +84,10 @@ struct SessionOptions {
   /// A calibration that cannot be done (too few usable frames) leaves the marker set as it is with
   /// a warning (true), or is an error (false: `s2kf calibrate`).
   bool calibration_may_fail = true;
+  /// A static trial of the same subject (its frames and labels; calibration.static_pose_sd_rad > 0
+  /// and the pose settings in `calibration`): calibrated together with the recording's stretches,
+  /// in one bundle adjustment (CalibrationOptions::static_frames). Empty (no frame): none.
+  MarkerSequence static_trial;
 };
 
 /// What a recording is tracked with, ready to run.
@@ -157,6 +161,12 @@ std::vector<double> calibration_weights(const body::MarkerSet& set, double track
 inline constexpr std::int64_t kMinimumStretchFrames = 100;
 std::vector<std::pair<std::int64_t, std::int64_t>> calibration_stretches(std::int64_t frames,
                                                                          std::int64_t budget, int windows);
+
+/// The static trial's frames with its points in the recording's order (`mapping`: the recording's
+/// labels mapped to the model's markers): a model marker the static trial does not show is missing
+/// there. Throws std::invalid_argument when it shows fewer than 3 of the recording's markers.
+MarkerSequence static_trial_in_recording_order(const MarkerSequence& static_trial, const body::MarkerSet& set,
+                                               const body::MarkerMapping& mapping, Eigen::Index points);
 
 /// Prepares a session: checks the recording, maps its labels to the set's markers, finds the
 /// subject's height, scales the model and, when asked, calibrates the subject on the first

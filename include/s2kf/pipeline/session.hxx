@@ -104,6 +104,13 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
     try {
       track::TimedFrameSource timed(source, session.times.read);
       MarkerSequence frames;
+      if (options.static_trial.frame_count() > 0) {  // first, so its frames are the first static_frames
+        frames = static_trial_in_recording_order(options.static_trial, set, session.mapping,
+                                                 static_cast<Eigen::Index>(source.labels().size()));
+        calibration.static_frames = static_cast<long>(frames.frame_count());
+        frames.rate_hz =
+            source.rate_hz();  // tracked as the recording's (a still subject: the rate barely matters)
+      }
       for (const auto& [first, count] : session.calibration_stretches) {
         const MarkerSequence stretch = read_frames(timed, first, count);
         if (frames.frame_count() == 0) {
@@ -144,6 +151,31 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
   }
   return session;
 }
+S2KF_INLINE MarkerSequence static_trial_in_recording_order(const MarkerSequence& static_trial,
+                                                           const body::MarkerSet& set,
+                                                           const body::MarkerMapping& mapping,
+                                                           Eigen::Index points) {
+  const body::MarkerMapping static_mapping = body::map_marker_set(static_trial.labels, set);
+  MarkerSequence frames;
+  frames.labels.assign(static_cast<std::size_t>(points), "");
+  frames.rate_hz = static_trial.rate_hz;
+  frames.resize(static_trial.frame_count());
+  int shared = 0;
+  for (std::size_t m = 0; m < mapping.point_of_marker.size() && m < static_mapping.point_of_marker.size();
+       ++m) {
+    const int to = mapping.point_of_marker[m], from = static_mapping.point_of_marker[m];
+    if (to < 0 || from < 0 || to >= points) continue;
+    ++shared;
+    frames.labels[static_cast<std::size_t>(to)] = static_trial.labels[static_cast<std::size_t>(from)];
+    frames.positions.middleRows(3 * to, 3) = static_trial.positions.middleRows(3 * from, 3);
+    frames.visible.row(to) = static_trial.visible.row(from);
+  }
+  if (shared < 3)
+    throw std::invalid_argument("the static trial shows " + std::to_string(shared) +
+                                " of the recording's markers; at least 3 are needed to calibrate with it");
+  return frames;
+}
+
 S2KF_INLINE track::TrackingRun run_session(const Session& session, FrameSource& source,
                                            const SampleSet& samples, const RunOptions& options,
                                            const RunHooks& hooks) {
