@@ -6,10 +6,15 @@ motion on the same subject (`s2kf simulate --seed S` draws the subject from the 
 the motion three ways against its truth:
 
   default  s2kf track REC --truth TRUTH                    (calibrates on the recording itself)
+  no-stretch  the same with --no-static-stretch
   static   s2kf calibrate STATIC --static; s2kf track REC --subject SUBJECT
   both     the same subject as --markerset: calibrated again on the recording, starting from it
   track    s2kf track REC --static STATIC [--static-options]  (what a user runs)
   refine   s2kf track REC --static STATIC --static-refine [--static-options]
+
+--lead-in starts every motion with the seed's static trial (its stance, 3 s) and a 1 s step from it
+into the motion: a static trial inside the recording, which `s2kf track` finds by itself (config
+`default`; `no-stretch` is the same with --no-static-stretch).
 
 --stance-sd DEG holds each seed's static trial in a posture of its own: every joint angle off the
 reference pose (--stance) by a draw of SD DEG (seeded by the seed, kept inside the joint's limits),
@@ -21,6 +26,7 @@ in degrees, root position RMS and mean marker distance in mm), one per occlusion
     scripts/static-trial-table.py [--s2kf build/s2kf] [--seeds 1,2,3] [--out DIR] [--raw FILE.json]
                                   [--occlusion none,paper] [--extra="--smooth"] [--configs default,track]
                                   [--stance zero|t-pose|a-pose] [--stance-sd DEG] [--static-options="..."]
+                                  [--lead-in]
 """
 import argparse
 import json
@@ -39,10 +45,11 @@ parser.add_argument("--static-motion", default="static", help="the static trial'
 parser.add_argument("--out", default="results/static-trial")
 parser.add_argument("--raw", default="", help="write every run's figures to this JSON file")
 parser.add_argument("--extra", default="", help="more options for every s2kf track, space-separated (--smooth)")
-parser.add_argument("--configs", default="default,static,both", help="of default, static, both, track, refine")
+parser.add_argument("--configs", default="default,static,both", help="of default, no-stretch, static, both, track, refine")
 parser.add_argument("--stance", default="zero", help="the static trial's reference pose: zero, t-pose, a-pose")
 parser.add_argument("--stance-sd", type=float, default=0.0, help="SD (deg) of each joint's offset from it")
 parser.add_argument("--markerset", default="", help="the markers the simulated subject wears (plugin_gait, cmu)")
+parser.add_argument("--lead-in", action="store_true", help="every motion starts with the static trial")
 parser.add_argument("--static-options", default="", help="more options for --static (track, refine), space-separated")
 args = parser.parse_args()
 CONFIGS = tuple(args.configs.split(","))
@@ -84,6 +91,23 @@ def write_stance(seed, path):
         json.dump(motion, f, indent=1)
 
 
+def write_lead_in(static_motion, motion, path):
+    """The static trial's keyframes, then `motion`'s 1 s after its last (a step into the motion)."""
+    def load(name):
+        bundled = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "motions", name + ".json")
+        with open(name if name.endswith(".json") else bundled) as f:
+            return json.load(f)
+    still, moving = load(static_motion), load(motion)
+    start = still["keyframes"][-1]["time"] + 1.0 - moving["keyframes"][0]["time"]
+    for key in moving["keyframes"]:
+        key["time"] += start
+    still["name"] = moving["name"] + "_after_static"
+    still["description"] = "A static trial, then " + moving["name"]
+    still["keyframes"] += moving["keyframes"]
+    with open(path, "w") as f:
+        json.dump(still, f, indent=1)
+
+
 os.makedirs(args.out, exist_ok=True)
 rows = []
 for seed in args.seeds.split(","):
@@ -101,9 +125,13 @@ for seed in args.seeds.split(","):
         for motion in args.motions.split(","):
             base = os.path.join(args.out, f"{motion}_{seed}_{occlusion}")
             extra = ["--occlusion", PAPER_OCCLUSION] if occlusion == "paper" else []
-            run("simulate", "--motion", motion, "--seed", seed, *extra, *worn, "--out", base + ".c3d")
+            simulated = motion
+            if args.lead_in:
+                simulated = base + "_motion.json"
+                write_lead_in(static_motion, motion, simulated)
+            run("simulate", "--motion", simulated, "--seed", seed, *extra, *worn, "--out", base + ".c3d")
             for config in CONFIGS:
-                option = {"default": [], "static": ["--subject", subject], "both": ["--markerset", subject],
+                option = {"default": [], "no-stretch": ["--no-static-stretch"], "static": ["--subject", subject], "both": ["--markerset", subject],
                           "track": ["--static", static, *args.static_options.split()],
                           "refine": ["--static", static, "--static-refine", *args.static_options.split()]}[config]
                 prefix = f"{base}_{config}"

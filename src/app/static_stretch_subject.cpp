@@ -57,10 +57,11 @@ StretchSubject static_stretch_subject(FrameSource& source, const std::string& in
     return result;
   }
   result.subject = calibrated.subject;
+  result.frames = frames;
   const std::string turn_off =
       request.names == OptionNames::program ? "--no-static-stretch" : "static_stretch=False";
   result.message = where + " are a static trial in the " + static_posture_text(calibrated, subject_settings) +
-                   ": the subject was calibrated there first, then on the recording (" + turn_off + ": not)";
+                   ": calibrated together with the recording (" + turn_off + ": not)";
   return result;
 }
 

@@ -106,8 +106,8 @@ void check_request(const TrackRequest& r) {
     throw UserError(name("static-posture") + " must be " + choices({"auto", "near", "exact"}) + ", not '" +
                     r.static_posture + "'");
   if (r.static_refine && r.static_trial.empty())
-    throw UserError(name("static-refine") + " calibrates the static trial and the recording together; it needs " +
-                    name("static"));
+    throw UserError(name("static-refine") +
+                    " calibrates the static trial and the recording together; it needs " + name("static"));
   if (!r.static_trial.empty() && !r.calibrate)
     throw UserError(name("static") +
                     " calibrates the subject on the static trial; it cannot be combined with " +
@@ -225,7 +225,10 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   if (request.static_stretch && options.calibrate && request.static_trial.empty() && frames > 0) {
     StretchSubject stretch = static_stretch_subject(source, input, prepared.choice, request, prepared.samples,
                                                     options.calibration.threads);
-    if (stretch.subject) prepared.choice.set = std::move(*stretch.subject);
+    if (stretch.subject) {  // calibrated together with the recording, as --static-refine does
+      apply_static_settings(static_trial_settings(request), options.calibration);
+      options.static_trial = std::move(stretch.frames);
+    }
     stretch_message = stretch.message;
   }
   pipeline::Session& session = prepared.session;

@@ -92,8 +92,8 @@ TEST(StaticTrialCommand, AWrongStanceIsRefusedAndWritesNoSubject) {
   EXPECT_FALSE(fs::exists(dir / "tracked.csv"));
 }
 
-// A recording that is all standing still in the T-pose: s2kf track takes it as its own static trial
-// and says so; --no-static-stretch does not.
+// A recording that is all standing still in the T-pose: s2kf track takes it as its own static trial,
+// calibrated together with the recording, and says so; --no-static-stretch does not.
 TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
@@ -111,6 +111,9 @@ TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
   EXPECT_NE(found.find("frames 0-299 (3.0 s) are a static trial in the t-pose (found from the data)"),
             std::string::npos)
       << found;
+  EXPECT_NE(found.find("calibrated together with the recording (--no-static-stretch: not)"),
+            std::string::npos)
+      << found;
   EXPECT_EQ(messages("no_stretch", "--no-static-stretch").find("static trial"), std::string::npos);
 }
 
@@ -125,14 +128,15 @@ TEST(StaticTrialCommand, RefineCalibratesTheStaticTrialAndTheRecordingTogether) 
   const auto [simulated, simulate_output] =
       test_support::run_command("simulate --motion walk --seed 5 --frames 200 --out " + walk);
   ASSERT_EQ(simulated, 0) << simulate_output;
-  const auto [status, output] = test_support::run_command("track " + walk + " --static " + trial +
-                                                          " --static-refine --formats csv --quiet --out " +
-                                                          (dir / "joint").string());
+  const auto [status, output] =
+      test_support::run_command("track " + walk + " --static " + trial +
+                                " --static-refine --formats csv --quiet --out " + (dir / "joint").string());
   ASSERT_EQ(status, 0) << output;
   const nlohmann::json summary = read_json(dir / "joint.json");
   std::string messages;
   for (const auto& message : summary["marker_set_messages"]) messages += message.get<std::string>() + "\n";
-  EXPECT_NE(messages.find("calibrated together with the static trial " + trial), std::string::npos) << messages;
+  EXPECT_NE(messages.find("calibrated together with the static trial " + trial), std::string::npos)
+      << messages;
   // The static trial's 301 frames come first, then the walk's 200.
   EXPECT_EQ(summary["calibration"]["frames"].get<int>(), 501) << summary["calibration"].dump();
   EXPECT_FALSE(fs::exists(dir / "joint_subject.json"));  // the subject is the recording's calibration

@@ -1,7 +1,8 @@
 /// @file
 /// A tracking request without a static trial: a stretch of the recording in which the subject
-/// stands still in a reference pose is its static trial (calibration/static_stretch.hpp), and the
-/// subject calibrated there is where the recording's own calibration starts.
+/// stands still in a reference pose is its static trial (calibration/static_stretch.hpp), calibrated
+/// together with the recording (pipeline::SessionOptions::static_trial) once a calibration on the
+/// stretch alone has shown it is one (a posture near a reference pose, a subject that passes the check).
 #pragma once
 
 #include <s2kf/app/marker_set_json.hpp>
@@ -17,8 +18,9 @@
 namespace s2kf::app {
 
 struct StretchSubject {
-  std::optional<body::MarkerSet> subject;  ///< calibrated on the stretch; none: no static stretch used
+  std::optional<body::MarkerSet> subject;  ///< calibrated on the stretch alone; none: no static stretch used
   std::string message;                     ///< what was found and used, or why a still stretch was not
+  MarkerSequence frames;                   ///< the stretch's frames, when used
 };
 
 /// Joint angles (degrees) the posture held on a stretch may be off its reference pose, at most, for
