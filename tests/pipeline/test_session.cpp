@@ -332,3 +332,37 @@ TEST(Session, CalibrationStretchesCoverTheRecordingWithinTheBudget) {
 }
 
 }  // namespace
+
+namespace {
+
+// A static trial whose file orders its points otherwise, names one the recording does not have and
+// lacks one the recording has: its frames come out in the recording's point order, the marker it
+// lacks missing, the one it adds dropped. One showing fewer than 3 of the recording's markers is
+// refused with a sentence.
+TEST(Session, AStaticTrialIsPutInTheRecordingsPointOrder) {
+  const body::MarkerSet set = kit_like_set();
+  const std::vector<std::string> names = body::mmm_body_model(1000).marker_names();
+  const std::vector<std::string> recording_labels{names[0], names[1], names[2], names[3]};
+  const body::MarkerMapping mapping = body::map_marker_set(recording_labels, set);
+  MarkerSequence trial;
+  trial.labels = {"NOT_A_MARKER", names[2], names[0], names[1]};  // names[3] missing
+  trial.rate_hz = 100;
+  trial.resize(2);
+  for (Eigen::Index f = 0; f < 2; ++f) {
+    Eigen::Matrix3Xd points(3, 4);
+    for (Eigen::Index p = 0; p < 4; ++p) points.col(p) = Eigen::Vector3d::Constant(10.0 * p + f);
+    trial.set_frame(f, points, FrameVisibility::Constant(4, true));
+  }
+  const MarkerSequence ordered = pipeline::static_trial_in_recording_order(trial, set, mapping, 4);
+  ASSERT_EQ(ordered.point_count(), 4);
+  ASSERT_EQ(ordered.frame_count(), 2);
+  EXPECT_EQ(ordered.frame(1).col(0), Eigen::Vector3d::Constant(21.0));  // names[0]: the trial's point 2
+  EXPECT_EQ(ordered.frame(1).col(1), Eigen::Vector3d::Constant(31.0));
+  EXPECT_EQ(ordered.frame(0).col(2), Eigen::Vector3d::Constant(10.0));
+  EXPECT_FALSE(ordered.visible(3, 0));
+  EXPECT_TRUE(ordered.frame(0).col(3).hasNaN());
+  trial.labels = {"A", "B", names[0], names[1]};
+  EXPECT_THROW(pipeline::static_trial_in_recording_order(trial, set, mapping, 4), std::invalid_argument);
+}
+
+}  // namespace
