@@ -181,9 +181,12 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
                                                        not_a_body_remedy(request))
                           : choose_marker_set_for(source.labels(), request.markerset, "");
     SubjectSettings settings = static_trial_settings(request);
-    // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held.
-    if (!prepared.choice.inferred.empty() && request.static_posture == "auto")
+    // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held,
+    // held exactly and tightly, as calibrate_static_trial does.
+    if (!prepared.choice.inferred.empty() && request.static_posture == "auto") {
       settings.static_posture = "exact";
+      settings.static_sd_deg = std::min(settings.static_sd_deg, kPlacedMarkersStaticSdDeg);
+    }
     apply_static_settings(settings, options.calibration);
     options.static_trial = read_static_trial(request);
     options.calibration_may_fail = false;
@@ -191,7 +194,7 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   } else if (!request.static_trial.empty()) {
     // The subject calibrated on the static trial (`s2kf calibrate --static`), with the markers the
     // set does not name placed by the recording's motion first (a static trial shows none), then
-    // the recording tracked with it as with a subject file, or calibrated again from it (static_refine).
+    // the recording tracked with it as with a subject file.
     const std::optional<MarkerSetChoice> completed =
         recording.readable_file
             ? completed_set_for_static_trial(request, input, recording.inferred_markerset_path)
