@@ -766,7 +766,8 @@ class BundleAdjustment {
   Eigen::MatrixXd shrink_;     ///< the weak-direction shrinkage prior on the offsets; empty: none
   int scales_ = 0, unknowns_ = 0;
   double scale_weight_ = 0;
-  std::size_t pose_prior_frames_ = 1;  ///< frames the adjustment holds (the posture's prior shares them)
+  /// The static trial's frames the adjustment holds (they share the posture's prior).
+  std::size_t pose_prior_frames_ = 1;
 };
 
 }  // namespace detail
