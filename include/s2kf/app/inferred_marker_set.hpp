@@ -5,6 +5,7 @@
 /// enough of a recording's labels.
 #pragma once
 
+#include <s2kf/app/calibrated_subject.hpp>
 #include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/sample_sets.hpp>
 #include <s2kf/app/user_error.hpp>
@@ -36,11 +37,13 @@ inline MarkerSequence read_recording_to_infer(const std::string& input) {
   }
 }
 
-/// Inference with the tracker at kInferenceSamples, the bundled sets as the known ones.
+/// Inference with the tracker at kInferenceSamples, the bundled sets as the known ones, on every
+/// core.
 inline markerset::MarkerSetInferenceOptions inference_options(int up_axis = -1) {
   markerset::MarkerSetInferenceOptions options;
   options.up_axis = up_axis;
   options.tracker.samples = kInferenceSamples;
+  options.threads = every_core();
   for (const std::string& name : bundled_marker_set_names())
     options.known_sets.push_back(resolve_marker_set(name));
   return options;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <s2kf/calibration/subject_calibration.hpp>
+#include <s2kf/core/parallel_for.hpp>
 
 namespace s2kf::calibration {
 namespace detail {
@@ -23,28 +24,6 @@ inline std::vector<std::string> scalable_segments(const body::BodyModel& model) 
 
 /// The bundle adjustment's frames are split into this many chunks, whatever the thread count.
 inline constexpr int kCalibrationChunks = 8;
-
-/// Calls work(c) for c = 0 .. count - 1, on up to `threads` threads (the calling one included;
-/// thread t takes c = t, t + threads, ...). An exception thrown by work stops that thread's
-/// chunks and is rethrown here once all threads are done.
-template <class Work>
-void for_each_chunk(int count, int threads, const Work& work) {
-  threads = std::clamp(threads, 1, std::max(count, 1));
-  std::vector<std::exception_ptr> failure(static_cast<std::size_t>(threads));
-  const auto run = [&](int t) {
-    try {
-      for (int c = t; c < count; c += threads) work(c);
-    } catch (...) {
-      failure[static_cast<std::size_t>(t)] = std::current_exception();
-    }
-  };
-  std::vector<std::thread> workers;
-  for (int t = 1; t < threads; ++t) workers.emplace_back(run, t);
-  run(0);
-  for (std::thread& worker : workers) worker.join();
-  for (const std::exception_ptr& e : failure)
-    if (e) std::rethrow_exception(e);
-}
 
 /// The frames [begin, end) of chunk c of kCalibrationChunks over `size` frames.
 inline std::pair<std::size_t, std::size_t> chunk_range(std::size_t size, int c) {
@@ -192,7 +171,7 @@ inline std::vector<BundleFrame> track_pass(const body::BodyModel& model, const b
   track::TrackerOptions pass_options = tracker_options;
   pass_options.information_form_update = false;
   pass_options.joint_speed_per_s = std::max(pass_options.joint_speed_per_s, pass_options.flexion_speed_per_s);
-  for_each_chunk(static_cast<int>(stretches.size()), options.threads, [&](int s) {
+  parallel_for(static_cast<int>(stretches.size()), options.threads, [&](int s) {
     Stretch& stretch = stretches[static_cast<std::size_t>(s)];
     track::Tracker tracker(model, mapping, pass_options, recording.rate_hz, samples);
     MarkerFrame input;
@@ -391,7 +370,7 @@ class BundleAdjustment {
   double cost(const body::BodyModel& model, const std::vector<BundleFrame>& frames,
               const std::vector<double>& cumulative) const {
     std::vector<double> chunk_sum(kCalibrationChunks, 0.0);
-    for_each_chunk(kCalibrationChunks, options_.threads, [&](int c) {
+    parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(frames.size(), c);
       for (std::size_t k = begin; k < end; ++k) {
         chunk_sum[static_cast<std::size_t>(c)] += frame_residual_sum(model, frames[k], true);
@@ -533,7 +512,7 @@ class BundleAdjustment {
     normal.g.resize(frames.size());
     std::vector<Eigen::MatrixXd> C(kCalibrationChunks, Eigen::MatrixXd::Zero(unknowns_, unknowns_));
     std::vector<Eigen::VectorXd> h(kCalibrationChunks, Eigen::VectorXd::Zero(unknowns_));
-    for_each_chunk(kCalibrationChunks, options_.threads, [&](int c) {
+    parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(frames.size(), c);
       const auto at = static_cast<std::size_t>(c);
       for (std::size_t k = begin; k < end; ++k)
@@ -656,7 +635,7 @@ class BundleAdjustment {
     std::vector<Eigen::VectorXd> chunk_rhs(kCalibrationChunks, Eigen::VectorXd::Zero(unknowns_));
     std::vector<char> solvable(kCalibrationChunks, 1);
     std::vector<Eigen::LLT<Eigen::MatrixXd>> factors(normal.A.size());
-    for_each_chunk(kCalibrationChunks, options_.threads, [&](int c) {
+    parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(normal.A.size(), c);
       const auto at = static_cast<std::size_t>(c);
       Eigen::MatrixXd A, X;
@@ -718,7 +697,7 @@ class BundleAdjustment {
 
     // Back-substitution: each frame's pose step given the subject step.
     std::vector<char> finite(kCalibrationChunks, 1);
-    for_each_chunk(kCalibrationChunks, options_.threads, [&](int c) {
+    parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(trial_frames.size(), c);
       for (std::size_t k = begin; k < end; ++k)
         if (!step_frame(model, factors[k].solve(normal.g[k] - normal.B[k] * subject_step), trial_frames[k]))

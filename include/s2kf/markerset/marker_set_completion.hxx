@@ -77,9 +77,11 @@ S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recordi
       if (c.points[i] == mapping.point_of_marker[m]) fixed[i] = true, model_marker[i] = static_cast<int>(m);
   // Clusters (LTBA-LTBD) go as a unit to the segment whose motion explains all their markers.
   const std::vector<detail::MarkerCluster> clusters = detail::label_clusters(c, fixed);
-  detail::Attempt kept;
-  for (const detail::FramedFit& framed : shortlist) {
-    detail::Attempt a = detail::initial_assignment(c, framed, shortlist.size(), excluded_note);
+  std::vector<detail::Attempt> attempts(shortlist.size());
+  parallel_for(static_cast<int>(shortlist.size()), options.threads, [&](int k) {
+    detail::Attempt& a = attempts[static_cast<std::size_t>(k)];
+    a = detail::initial_assignment(c, shortlist[static_cast<std::size_t>(k)], shortlist.size(),
+                                   excluded_note);
     for (std::size_t i = 0; i < c.points.size(); ++i)
       if (fixed[i]) {
         const body::Marker& marker = wearing.markers[static_cast<std::size_t>(model_marker[i])];
@@ -88,8 +90,10 @@ S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recordi
         a.set.entries[i].offset = marker.offset;
       }
     detail::reassignment_rounds(c, a, fixed, clusters);
+  });
+  detail::Attempt kept;
+  for (detail::Attempt& a : attempts)
     if (a.spread_rms_mm < kept.spread_rms_mm) kept = std::move(a);
-  }
   result.notes = kept.notes;
   result.cluster_notes = kept.cluster_notes;
 

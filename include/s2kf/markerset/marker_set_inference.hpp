@@ -69,6 +69,9 @@ struct MarkerSetInferenceOptions {
   long frames = 600;              ///< frames tracked per round at most, from the start
   long skip_frames = 20;          ///< tracked frames left out at the start of each round (convergence)
   int max_rounds = 4;
+  /// Threads for the template fits of the candidate frames and the shortlisted attempts' rounds
+  /// (each on its own; the result does not depend on the count).
+  int threads = 1;
   RigidClusterOptions clusters;
   SegmentRigidityOptions rigidity;  ///< the topology check that repairs the template's assignment
   /// Refusals: the facing direction of the template fit must beat every direction more than 60

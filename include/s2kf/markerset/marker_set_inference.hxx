@@ -5,6 +5,7 @@
 
 #include <s2kf/markerset/marker_set_inference.hpp>
 
+#include <s2kf/core/parallel_for.hpp>
 #include <s2kf/geometry/nearest_point_tree.hpp>
 #include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
@@ -407,12 +408,18 @@ struct FramedFit {
 /// (the subject stands there, and the standing subject defines the zero of the joint angles, as the
 /// model's zero pose does), then the clearest, at most options.template_attempts.
 inline std::vector<FramedFit> shortlist_template_fits(const InferenceContext& c, bool by_residual = false) {
+  std::vector<TemplateFit> trials(c.template_frames.size());
+  parallel_for(static_cast<int>(trials.size()), c.options.threads, [&](int k) {
+    const long f = c.template_frames[static_cast<std::size_t>(k)];
+    trials[static_cast<std::size_t>(k)] = fit_template(c.base, c.candidates, c.positions(f, c.shown_in(f)),
+                                                       c.up, c.options.refine_pose_above_rms_mm);
+  });
   std::vector<FramedFit> clear;
   double best_margin = 0;
   long best_margin_frame = c.template_frames.front();
-  for (long f : c.template_frames) {
-    TemplateFit trial = fit_template(c.base, c.candidates, c.positions(f, c.shown_in(f)), c.up,
-                                     c.options.refine_pose_above_rms_mm);
+  for (std::size_t k = 0; k < trials.size(); ++k) {
+    const long f = c.template_frames[k];
+    TemplateFit& trial = trials[k];
     if (trial.margin > best_margin) best_margin = trial.margin, best_margin_frame = f;
     if (trial.margin > c.options.heading_margin) clear.push_back({f, std::move(trial)});
   }
@@ -1024,12 +1031,16 @@ S2KF_INLINE InferredMarkerSet infer_marker_set(const MarkerSequence& recording, 
 
   // Each shortlisted fit is carried through the rounds; the one whose markers then ride most
   // rigidly on their segments is kept.
-  detail::Attempt kept;
-  for (const detail::FramedFit& framed : shortlist) {
-    detail::Attempt a = detail::initial_assignment(c, framed, shortlist.size(), excluded_note);
+  std::vector<detail::Attempt> attempts(shortlist.size());
+  parallel_for(static_cast<int>(shortlist.size()), options.threads, [&](int k) {
+    detail::Attempt& a = attempts[static_cast<std::size_t>(k)];
+    a = detail::initial_assignment(c, shortlist[static_cast<std::size_t>(k)], shortlist.size(),
+                                   excluded_note);
     detail::reassignment_rounds(c, a);
+  });
+  detail::Attempt kept;
+  for (detail::Attempt& a : attempts)
     if (a.spread_rms_mm < kept.spread_rms_mm) kept = std::move(a);
-  }
   result.template_frame = kept.template_frame;
   result.rounds = kept.rounds;
   result.height_mm = kept.height;
