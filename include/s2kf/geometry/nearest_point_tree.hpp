@@ -21,7 +21,8 @@ class NearestPointTree {
   };
 
   /// A balanced tree over the columns of `points` (which it copies): each node splits its range
-  /// at the median of the coordinate along which the range spreads furthest.
+  /// at the median of the coordinate along which the range spreads furthest, down to ranges of at
+  /// most kLeafPoints points, which a search scans.
   explicit NearestPointTree(const Eigen::Matrix3Xd& points)
       : points_(3, points.cols()),
         original_(static_cast<std::size_t>(points.cols())),
@@ -47,8 +48,11 @@ class NearestPointTree {
   Eigen::Index size() const { return points_.cols(); }
 
  private:
+  /// A range this small is scanned: cheaper than descending further (the tree's depth).
+  static constexpr Eigen::Index kLeafPoints = 8;
+
   void build(const Eigen::Matrix3Xd& points, Eigen::Index begin, Eigen::Index end) {
-    if (end - begin < 2) return;
+    if (end - begin <= kLeafPoints) return;
     Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
     Eigen::Vector3d high = -low;
     for (Eigen::Index k = begin; k < end; ++k) {
@@ -65,14 +69,21 @@ class NearestPointTree {
     build(points, middle + 1, end);
   }
 
-  void search(const Eigen::Vector3d& query, Eigen::Index begin, Eigen::Index end, Hit& best) const {
-    if (begin >= end) return;
-    const Eigen::Index middle = begin + (end - begin) / 2;
-    const Eigen::Index index = original_[static_cast<std::size_t>(middle)];
-    const double d2 = (points_.col(middle) - query).squaredNorm();
+  /// Takes point k (tree order) where it is nearer than the best, or as near with a lower index.
+  void consider(const Eigen::Vector3d& query, Eigen::Index k, Hit& best) const {
+    const Eigen::Index index = original_[static_cast<std::size_t>(k)];
+    const double d2 = (points_.col(k) - query).squaredNorm();
     if (d2 < best.squared_distance || (d2 == best.squared_distance && best.index >= 0 && index < best.index))
       best = {index, d2};
-    if (end - begin == 1) return;
+  }
+
+  void search(const Eigen::Vector3d& query, Eigen::Index begin, Eigen::Index end, Hit& best) const {
+    if (end - begin <= kLeafPoints) {
+      for (Eigen::Index k = begin; k < end; ++k) consider(query, k, best);
+      return;
+    }
+    const Eigen::Index middle = begin + (end - begin) / 2;
+    consider(query, middle, best);
     const int axis = axis_[static_cast<std::size_t>(middle)];
     const double gap = query(axis) - points_(axis, middle);
     // The near side first; the far side only where it may hold a point as near as the best
