@@ -6,6 +6,7 @@
 
 #include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/core/parallel_for.hpp>
+#include <s2kf/core/product_tiles.hpp>
 
 namespace s2kf::calibration {
 namespace detail {
@@ -638,7 +639,7 @@ class BundleAdjustment {
     parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(normal.A.size(), c);
       const auto at = static_cast<std::size_t>(c);
-      Eigen::MatrixXd A, X;
+      Eigen::MatrixXd A, X, Xt;
       for (std::size_t k = begin; k < end && solvable[at]; ++k) {
         A = normal.A[k];
         damp(A, damping);
@@ -649,7 +650,8 @@ class BundleAdjustment {
         }
         X = factors[k].matrixL().solve(normal.B[k]);  // L^-1 B
         const Eigen::VectorXd z = factors[k].matrixL().solve(normal.g[k]);
-        chunk_reduced[at].selfadjointView<Eigen::Lower>().rankUpdate(X.transpose(), -1.0);
+        Xt = X.transpose();  // column-major for the product tiles compiled for the processor
+        add_self_product_lower(chunk_reduced[at], Xt, -1.0);
         chunk_rhs[at].noalias() -= X.transpose() * z;
       }
     });
