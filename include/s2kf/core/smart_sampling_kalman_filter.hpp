@@ -380,6 +380,8 @@ class FilterCore {
     Eigen::MatrixXd& products = block_products_;
     Eigen::MatrixXf& products_f = block_products_f_;
     if (products.rows() < m || products.cols() < group_width_) products.resize(m, group_width_);
+    if (group_regression_.rows() < group_width_ || group_regression_.cols() != regressors)
+      group_regression_.resize(std::max(group_regression_.rows(), group_width_), regressors);
     if (single_precision) {
       single_buffer(regression_f_, n, m);
       if (products_f.rows() < m || products_f.cols() < group_width_) products_f.resize(m, group_width_);
@@ -443,6 +445,7 @@ class FilterCore {
   // The information form: sqrt(w) z of the samples (the + half of a symmetric set), G^T, the
   // n x n system and the products per block (see add_diagonal_block_moments).
   Eigen::MatrixXd scaled_points_, regression_, block_products_;
+  Eigen::MatrixXd group_regression_;  ///< a large group's G_b (G^T's columns transposed): G_b G_b^T's operand
   Eigen::MatrixXf scaled_points_f_, regression_f_, block_products_f_, component_spread_f_;
   // UpdateOptions::information_quadratic_states: sqrt(w) times the products of each + sample, the
   // pair sums sqrt(w) (y+_k + y-_k - 2 y^) and the products' cross moments with them.

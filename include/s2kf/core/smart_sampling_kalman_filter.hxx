@@ -388,7 +388,9 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
     auto d_group = panel.topRows(d);
     auto g_group = gt.middleCols(k, d);
     d_group.template triangularView<Eigen::Lower>() = cyy_.block(k, k, d, d);
-    d_group.template selfadjointView<Eigen::Lower>().rankUpdate(g_group.transpose(), -1.0);
+    auto g_rows = group_regression_.topRows(d);
+    g_rows = g_group.transpose();
+    add_self_product_lower(d_group, g_rows, -1.0);  // the tiles of the processor, not the build's
     panel.middleRows(d, na) = g_group;
     panel.row(d + na) = innovation.segment(k, d).transpose();
     if (!bordered_.factorise()) return false;
