@@ -15,6 +15,7 @@
 #include <s2kf/core/lcd_distance.hpp>
 #include <s2kf/core/lcd_sample_set.hpp>
 #include <s2kf/core/marginal_update.hpp>
+#include <s2kf/core/parallel_for.hpp>
 #include <s2kf/core/product_tiles.hpp>
 #include <s2kf/core/rts_smoother.hpp>
 #include <s2kf/core/sample_set.hpp>
