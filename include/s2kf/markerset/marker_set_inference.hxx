@@ -948,28 +948,17 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
       if (from_motion(best_frame)) a.standing[i].reset();
       place_point(c, a, i, a.spread.mean[i][static_cast<std::size_t>(best_frame)] * (1000.0 / a.height));
     }
-    moved += place_clusters_as_units(
-        c, a, clusters,
-        [&](std::size_t i, int frame) {
-          const bool measured = std::isfinite(a.spread.spread(static_cast<Eigen::Index>(i), frame));
-          if (from_motion(frame) && measured) a.standing[i].reset();
-          place_point(c, a, i,
-                      measured ? Eigen::Vector3d(a.spread.mean[i][static_cast<std::size_t>(frame)] *
-                                                 (1000.0 / a.height))
-                               : Eigen::Vector3d::Zero());
-        },
-        cluster_notes);
-    moved += split_clusters_sharing_a_segment(
-        c, a, clusters,
-        [&](std::size_t i, int frame) {
-          const bool measured = std::isfinite(a.spread.spread(static_cast<Eigen::Index>(i), frame));
-          if (from_motion(frame) && measured) a.standing[i].reset();
-          place_point(c, a, i,
-                      measured ? Eigen::Vector3d(a.spread.mean[i][static_cast<std::size_t>(frame)] *
-                                                 (1000.0 / a.height))
-                               : Eigen::Vector3d::Zero());
-        },
-        cluster_notes);
+    // Puts point i on frame `frame` where the motion measured it there (else at the frame's origin).
+    const auto move_point = [&](std::size_t i, int frame) {
+      const bool measured = std::isfinite(a.spread.spread(static_cast<Eigen::Index>(i), frame));
+      if (from_motion(frame) && measured) a.standing[i].reset();
+      place_point(
+          c, a, i,
+          measured ? Eigen::Vector3d(a.spread.mean[i][static_cast<std::size_t>(frame)] * (1000.0 / a.height))
+                   : Eigen::Vector3d::Zero());
+    };
+    moved += place_clusters_as_units(c, a, clusters, move_point, cluster_notes);
+    moved += split_clusters_sharing_a_segment(c, a, clusters, move_point, cluster_notes);
     a.rounds = round + 1;
     if (moved == 0) break;
   }
