@@ -648,6 +648,26 @@ inline std::vector<MarkerCluster> label_clusters(const InferenceContext& c, cons
 
 /// One cluster's candidate segments (those its markers are on, the ones next to them, the one its
 /// name says) and how steadily each carries it in the last round of tracking.
+/// Whether any point of the attempt rides on `segment`.
+inline bool segment_carries_markers(const InferenceContext& c, const Attempt& a, const std::string& segment) {
+  for (std::size_t i = 0; i < c.points.size(); ++i)
+    if (body::segment_of_frame(c.base, a.frame_of[i]) == segment) return true;
+  return false;
+}
+
+/// The frame of `segment` that carries point i steadiest (the segment's own frame where none was
+/// measured).
+inline int steadiest_frame_on(const InferenceContext& c, const Attempt& a, std::size_t i,
+                              const std::string& segment) {
+  int frame = c.base.frame_index(segment);
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < c.base.frame_count(); ++k)
+    if (body::segment_of_frame(c.base, k) == segment &&
+        a.spread.spread(static_cast<Eigen::Index>(i), k) < best)
+      frame = k, best = a.spread.spread(static_cast<Eigen::Index>(i), k);
+  return frame;
+}
+
 struct ClusterCandidates {
   const InferenceContext& c;
   const Attempt& a;
@@ -668,11 +688,7 @@ struct ClusterCandidates {
       segments.push_back(segment);
   }
   /// Whether any point rides on `segment` now: else its tracked motion is the prior's, no evidence.
-  bool carries_markers(const std::string& segment) const {
-    for (std::size_t i = 0; i < c.points.size(); ++i)
-      if (body::segment_of_frame(c.base, a.frame_of[i]) == segment) return true;
-    return false;
-  }
+  bool carries_markers(const std::string& segment) const { return segment_carries_markers(c, a, segment); }
   /// The RMS over the members of their spread on the segment's steadiest frame for each.
   double cost_on(const std::string& segment) const {
     double sum2 = 0;
@@ -769,12 +785,7 @@ int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::ve
     if (chosen.empty()) continue;
     for (std::size_t i : cluster.members) {
       if (body::segment_of_frame(c.base, a.frame_of[i]) == chosen) continue;
-      int frame = c.base.frame_index(chosen);
-      double best = std::numeric_limits<double>::infinity();
-      for (int k = 0; k < c.base.frame_count(); ++k)
-        if (body::segment_of_frame(c.base, k) == chosen &&
-            a.spread.spread(static_cast<Eigen::Index>(i), k) < best)
-          frame = k, best = a.spread.spread(static_cast<Eigen::Index>(i), k);
+      const int frame = steadiest_frame_on(c, a, i, chosen);
       a.frame_of[i] = frame;
       place(i, frame);
       ++moved;
@@ -818,11 +829,6 @@ int split_clusters_sharing_a_segment(const InferenceContext& c, Attempt& a,
       if (segment_of(i) != segment_of(k.members.front())) return false;
     return true;
   };
-  const auto carries_markers = [&](const std::string& segment) {
-    for (std::size_t i = 0; i < c.points.size(); ++i)
-      if (segment_of(i) == segment) return true;
-    return false;
-  };
   // Mean distance (tracked mm) of a cluster's markers from the origin of `frame`.
   const auto distance_from = [&](const MarkerCluster& k, int frame) {
     double sum = 0;
@@ -845,7 +851,7 @@ int split_clusters_sharing_a_segment(const InferenceContext& c, Attempt& a,
       std::string target;
       double nearest = std::numeric_limits<double>::infinity();
       for (const std::string& empty : adjacent_segments(c.base, shared)) {
-        if (carries_markers(empty)) continue;
+        if (segment_carries_markers(c, a, empty)) continue;
         // The joint between them is the child's origin.
         bool child = false;
         for (const body::Joint& joint : c.base.joints)
@@ -858,12 +864,7 @@ int split_clusters_sharing_a_segment(const InferenceContext& c, Attempt& a,
       }
       if (!nearer) continue;
       for (std::size_t i : nearer->members) {
-        int frame = c.base.frame_index(target);
-        double best = std::numeric_limits<double>::infinity();
-        for (int k = 0; k < c.base.frame_count(); ++k)
-          if (body::segment_of_frame(c.base, k) == target &&
-              a.spread.spread(static_cast<Eigen::Index>(i), k) < best)
-            frame = k, best = a.spread.spread(static_cast<Eigen::Index>(i), k);
+        const int frame = steadiest_frame_on(c, a, i, target);
         a.frame_of[i] = frame;
         place(i, frame);
         ++moved;
