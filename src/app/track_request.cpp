@@ -172,14 +172,18 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
 
   pipeline::SessionOptions options = session_options(request, source.rate_hz());
   prepared.samples = cached_sample_set(46, request.samples);
+  // The set the request names, or the best bundled match completed (a file: inferred where none fits).
+  const auto choose_set = [&] {
+    return recording.readable_file
+               ? choose_or_infer_marker_set(input, source.labels(), request.markerset, request.subject,
+                                            recording.inferred_markerset_path, request.force,
+                                            not_a_body_remedy(request))
+               : choose_marker_set_for(source.labels(), request.markerset, request.subject);
+  };
   if (!request.static_trial.empty() && request.static_refine) {
     // The static trial and the recording calibrated together (one bundle adjustment from the
     // marker set): the static frames fix the gauges, the moving ones what bending joints show.
-    prepared.choice = recording.readable_file
-                          ? choose_or_infer_marker_set(input, source.labels(), request.markerset, "",
-                                                       recording.inferred_markerset_path, request.force,
-                                                       not_a_body_remedy(request))
-                          : choose_marker_set_for(source.labels(), request.markerset, "");
+    prepared.choice = choose_set();  // no subject beside a static trial (check_request)
     SubjectSettings settings = static_trial_settings(request);
     // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held,
     // held exactly and tightly, as calibrate_static_trial does.
@@ -215,12 +219,8 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
       prepared.choice.inferred = completed->inferred;
       prepared.choice.left_out = completed->left_out;
     }
-  } else if (recording.readable_file) {
-    prepared.choice = choose_or_infer_marker_set(input, source.labels(), request.markerset, request.subject,
-                                                 recording.inferred_markerset_path, request.force,
-                                                 not_a_body_remedy(request));
   } else {
-    prepared.choice = choose_marker_set_for(source.labels(), request.markerset, request.subject);
+    prepared.choice = choose_set();
   }
   if (options.calibrate && request.calibration_samples > 0 && request.calibration_samples != request.samples)
     options.calibration_samples = cached_sample_set(46, request.calibration_samples);

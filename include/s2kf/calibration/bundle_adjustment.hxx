@@ -8,6 +8,8 @@
 #include <s2kf/core/parallel_for.hpp>
 #include <s2kf/core/product_tiles.hpp>
 
+#include <iterator>
+
 namespace s2kf::calibration {
 namespace detail {
 
@@ -311,8 +313,7 @@ class BundleAdjustment {
           // trial's information alone: the moving frames' would hold the gauges, which only the
           // static trial's posture sees, at the marker set.
           std::vector<BundleFrame> still;
-          for (const BundleFrame& frame : frames)
-            if (frame.prior_joints.size() > 0) still.push_back(frame);
+          std::copy_if(frames.begin(), frames.end(), std::back_inserter(still), holds_posture_prior);
           NormalEquations static_normal;
           linearise_all(model, still, static_normal);
           choose_shrinkage(static_normal);
@@ -394,10 +395,12 @@ class BundleAdjustment {
     return sum;
   }
 
-  /// The frames the posture's prior holds (those of the static trial); at least 1.
+  /// Whether the posture's prior holds `frame` (a frame of the static trial).
+  static bool holds_posture_prior(const BundleFrame& frame) { return frame.prior_joints.size() > 0; }
+
+  /// The frames the posture's prior holds; at least 1.
   static std::size_t posture_prior_frames(const std::vector<BundleFrame>& frames) {
-    const auto count = std::count_if(frames.begin(), frames.end(),
-                                     [](const BundleFrame& frame) { return frame.prior_joints.size() > 0; });
+    const auto count = std::count_if(frames.begin(), frames.end(), holds_posture_prior);
     return std::max<std::size_t>(static_cast<std::size_t>(count), 1);
   }
 

@@ -43,11 +43,12 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
       break;
     }
     if (frames.empty()) throw std::invalid_argument("calibration: no frame could be tracked");
-    if (round == 0 && options.static_pose_sd_rad > 0 && detail::static_trial_frames(frames, options).empty())
-      throw std::invalid_argument("calibration: no frame of the static trial could be tracked");
-    if (round == 0 && options.static_pose_sd_rad > 0)
-      reference = detail::choose_static_pose(options, detail::static_trial_frames(frames, options),
-                                             model.joint_count(), result.static_pose_choice);
+    if (round == 0 && options.static_pose_sd_rad > 0) {
+      const std::vector<detail::BundleFrame> still = detail::static_trial_frames(frames, options);
+      if (still.empty())
+        throw std::invalid_argument("calibration: no frame of the static trial could be tracked");
+      reference = detail::choose_static_pose(options, still, model.joint_count(), result.static_pose_choice);
+    }
 
     // Inliers: observed residuals at the tracked poses within max(floor, 4 x median).
     std::vector<std::vector<double>> distances(frames.size());
