@@ -3,7 +3,7 @@
 /// subcommand never touches main.cpp.
 #pragma once
 
-#include <s2kf/app/user_error.hpp>
+#include "front_end.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -13,10 +13,6 @@
 #include <vector>
 
 namespace s2kf::cli {
-
-// The program is a front end of the application layer (include/s2kf/app/): its marker sets,
-// summaries, output files and errors (app::UserError: one sentence, exit status 1) are the program's.
-using namespace s2kf::app;
 
 struct Command {
   std::string name;

@@ -6,8 +6,8 @@
 #include <s2kf/app/motion_json.hpp>
 #include <s2kf/app/sample_sets.hpp>
 #include <s2kf/app/track_summary.hpp>
-#include "command.hpp"
 #include "evaluation_files.hpp"
+#include "front_end.hpp"
 
 #include <s2kf/evaluation/evaluation.hpp>
 #include <s2kf/evaluation/hidden_time_error.hpp>

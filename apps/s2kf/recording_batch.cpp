@@ -1,6 +1,6 @@
 #include "recording_batch.hpp"
 
-#include "command.hpp"
+#include "front_end.hpp"
 
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_error.hpp>

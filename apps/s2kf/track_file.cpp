@@ -5,8 +5,8 @@
 #include <s2kf/app/extra_outputs.hpp>
 #include <s2kf/app/frame_reports.hpp>
 #include <s2kf/app/track_summary.hpp>
-#include "command.hpp"
 #include "frame_figure.hpp"
+#include "front_end.hpp"
 #include "interruption.hpp"
 #include "viewer/result_page.hpp"  // --html
 
