@@ -11,6 +11,10 @@ build=build
 # for editing one file at a time is quicker without: configure it yourself, as in the README.
 unity=(-DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=16)
 flags=(-DCMAKE_BUILD_TYPE=Release -DS2KF_WERROR=ON "${unity[@]}")
+# A compiler cache: a second run after an edit recompiles only what changed, and the pip wheel test
+# (tests/tools/pip_install.sh, built with this build's compiler and flags) finds the library's
+# units compiled already instead of compiling them again (3 minutes of CPU).
+launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 skip=()
 # The C3D mutation test (C3dFuzz) runs for a bounded time: 5 s here, 10 s under the sanitizers,
 # where a mutation that reads out of bounds is caught (CI then runs libFuzzer on the reader for
@@ -45,7 +49,7 @@ fi
 # python3-venv for the test environment of PyPI packages (OpenSim, biorbd, ezc3d: tests/tools,
 # python/tests), and slurm-wlm and munge (the Slurm job array of docs/batch.md, on a one-node cluster
 # the test starts).
-scripts/install-deps.sh pybind11-dev python3-dev python3-numpy python3-pytest libxml2-utils blender chromium \
+scripts/install-deps.sh ccache pybind11-dev python3-dev python3-numpy python3-pytest libxml2-utils blender chromium \
   liblo-tools python3-venv slurm-wlm munge
 # Absolute but not resolved: the venv's python is a symlink to the system's, and only the venv's
 # own path makes Python use the venv's packages.
@@ -60,7 +64,7 @@ jobs=$(nproc 2>/dev/null || echo 2)
 # directory made earlier keeps the generator it was made with.
 generator=()
 [ -f "$build/CMakeCache.txt" ] || generator=(-G Ninja)
-cmake -S . -B "$build" "${generator[@]}" "${flags[@]}" -DS2KF_TEST_PYTHON="$test_python" >/dev/null
+cmake -S . -B "$build" "${generator[@]}" "${flags[@]}" "${launcher[@]}" -DS2KF_TEST_PYTHON="$test_python" >/dev/null
 cmake --build "$build" -j "$jobs"
 cd "$build"
 S2KF_FUZZ_SECONDS=$fuzz_seconds ctest --output-on-failure -j "$jobs" "${skip[@]}"

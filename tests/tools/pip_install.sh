@@ -4,10 +4,13 @@
 # S2KF_DATA_DIR, the module imports from the venv, lists and simulates a bundled motion and tracks
 # the recording with a bundled marker set. The installed files (the wheel's RECORD) must hold the
 # module and every bundled marker set and motion.
-#   tests/tools/pip_install.sh SOURCE_DIR WORK_DIR
+#   tests/tools/pip_install.sh SOURCE_DIR WORK_DIR [NAME=VALUE...]
+# Each NAME=VALUE is a CMake setting of the wheel's build (ctest passes its own build's compiler,
+# launcher and flags); without any, the wheel is built exactly as a user's `pip install .` builds it.
 set -euo pipefail
 source_dir=$(cd "$1" && pwd)
 work=$2
+shift 2
 rm -rf "$work"
 mkdir -p "$work/elsewhere"
 work=$(cd "$work" && pwd)
@@ -23,20 +26,23 @@ if root != sub:
 PY
 
 /usr/bin/python3 -m venv "$work/venv"
-# The compiler cache of this machine, where there is one; all cores for the module's build.
-if command -v ccache >/dev/null; then export CMAKE_CXX_COMPILER_LAUNCHER=ccache; fi
+# All cores for the wheel's build.
 export CMAKE_BUILD_PARALLEL_LEVEL=${CMAKE_BUILD_PARALLEL_LEVEL:-$(nproc 2>/dev/null || echo 2)}
 unset S2KF_DATA_DIR PYTHONPATH
-# The wheel's build at -O1 instead of -O3: this test checks the package (backend, build, installed
-# files, import, a tracked recording), not the code's speed, and the whole test then takes about a
-# quarter less CPU (187 against 255 s, AMD EPYC, 2 cores, no compiler cache).
-# S2KF_PIP_TEST_OPTIMISATION= (empty) builds the wheel exactly as a user's `pip install .` does.
-optimisation=${S2KF_PIP_TEST_OPTIMISATION--O1}
 config=()
-[ -z "$optimisation" ] || config=("--config-settings=cmake.define.CMAKE_CXX_FLAGS_RELEASE=$optimisation -DNDEBUG")
+for setting in "$@"; do
+  # An empty value (no launcher, no extra flags) leaves the project's default.
+  [ -n "${setting#*=}" ] && config+=("--config-settings=cmake.define.$setting")
+done
+# The compiler cache's hits show which objects were the build's own.
+stats() {
+  command -v ccache >/dev/null &&
+    ccache --print-stats 2>/dev/null | awk '$1 ~ /^(direct_cache_hit|preprocessed_cache_hit|cache_miss)$/ { printf "%s %s ", $1, $2 }'
+}
+before=$(stats || true)
 start=$(date +%s)
 (cd "$work/elsewhere" && "$work/venv/bin/python" -m pip install --disable-pip-version-check -q "${config[@]}" "$source_dir")
-echo "pip install: $(($(date +%s) - start)) s"
+echo "pip install: $(($(date +%s) - start)) s; compiler cache before: ${before:-none}; after: $(stats || true)"
 
 cd "$work/elsewhere"
 "$work/venv/bin/python" - "$source_dir" "$work" <<'PY'
