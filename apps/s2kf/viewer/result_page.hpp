@@ -4,7 +4,7 @@
 /// the library's forward kinematics, and writes the page completely or not at all.
 #pragma once
 
-#include "../command.hpp"
+#include "../front_end.hpp"
 #include "page_data.hpp"
 #include "page_writer.hpp"
 
