@@ -10,6 +10,7 @@
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/socket.h>
@@ -23,7 +24,6 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 extern char** environ;
@@ -46,6 +46,36 @@ std::string walk_subject() {
   }();
   return subject;
 }
+
+/// A UDP socket on a free loopback port, for the poses `s2kf live --udp-json` sends.
+struct UdpReceiver {
+  int socket_fd = socket(AF_INET, SOCK_DGRAM, 0);
+  int port = 0;
+  UdpReceiver() {
+    const int buffer = 1 << 20;
+    setsockopt(socket_fd, SOL_SOCKET, SO_RCVBUF, &buffer, sizeof buffer);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t length = sizeof address;
+    if (socket_fd >= 0 && bind(socket_fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0 &&
+        getsockname(socket_fd, reinterpret_cast<sockaddr*>(&address), &length) == 0)
+      port = ntohs(address.sin_port);
+  }
+  ~UdpReceiver() { close(socket_fd); }
+  UdpReceiver(const UdpReceiver&) = delete;
+  UdpReceiver& operator=(const UdpReceiver&) = delete;
+  /// The next datagram, waiting at most `timeout_ms` (0: only one already here); false if none came.
+  bool receive(std::string& datagram, int timeout_ms) const {
+    pollfd ready{socket_fd, POLLIN, 0};
+    if (poll(&ready, 1, timeout_ms) <= 0) return false;
+    char bytes[65536];
+    const ssize_t n = recv(socket_fd, bytes, sizeof bytes, 0);
+    if (n <= 0) return false;
+    datagram.assign(bytes, static_cast<std::size_t>(n));
+    return true;
+  }
+};
 
 nlohmann::json summary_of(const std::string& prefix) {
   return nlohmann::json::parse(read_text(prefix + ".json"));
@@ -101,30 +131,20 @@ TEST(LiveCommand, SameJointAnglesAsTrackOnTheServedFile) {
 TEST(LiveCommand, EveryPoseGoesOutAsAJsonLineOverUdp) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = empty_scratch("live_udp");
-  const int receiver = socket(AF_INET, SOCK_DGRAM, 0);
-  ASSERT_GE(receiver, 0);
-  const int buffer = 1 << 20;
-  setsockopt(receiver, SOL_SOCKET, SO_RCVBUF, &buffer, sizeof buffer);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(bind(receiver, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
-  socklen_t length = sizeof address;
-  getsockname(receiver, reinterpret_cast<sockaddr*>(&address), &length);
+  const UdpReceiver receiver;
+  ASSERT_GT(receiver.port, 0);
   Server server(data_file("walk.c3d"), dir);
   const std::string live = (dir / "live").string();
   const CommandResult r =
       run_command("live " + server.address() + " --subject " + walk_subject() +
                   " --frames 60 --backlog 100000 --formats csv --quiet --udp-json 127.0.0.1:" +
-                  std::to_string(ntohs(address.sin_port)) + " --out " + live);
+                  std::to_string(receiver.port) + " --out " + live);
   ASSERT_EQ(r.status, 0) << r.output;
   std::vector<nlohmann::json> messages;
-  char datagram[65536];
-  for (ssize_t n; (n = recv(receiver, datagram, sizeof datagram, MSG_DONTWAIT)) > 0;) {
-    ASSERT_EQ(datagram[n - 1], '\n');
-    messages.push_back(nlohmann::json::parse(std::string(datagram, static_cast<std::size_t>(n))));
+  for (std::string datagram; receiver.receive(datagram, 0);) {
+    ASSERT_EQ(datagram.back(), '\n');
+    messages.push_back(nlohmann::json::parse(datagram));
   }
-  close(receiver);
   ASSERT_EQ(messages.size(), 60u);
   const auto rows = csv_rows(read_text(live + ".csv"));
   for (std::size_t f = 0; f < messages.size(); ++f) {
@@ -340,22 +360,30 @@ TEST(LiveCommand, CtrlCEndsTheStreamAndWritesTheFrames) {
   const fs::path dir = empty_scratch("live_interrupt");
   Server server(data_file("walk.c3d"), dir, {"--loop"});
   const std::string live = (dir / "live").string();
-  std::vector<std::string> arguments{S2KF_CLI,    "live", server.address(), "--subject", walk_subject(),
-                                     "--formats", "csv",  "--quiet",        "--out",     live};
+  // The interrupt comes once 150 poses have gone out (over UDP), however busy the machine is.
+  const UdpReceiver receiver;
+  ASSERT_GT(receiver.port, 0);
+  std::vector<std::string> arguments{
+      S2KF_CLI,    "live",         server.address(),
+      "--subject", walk_subject(), "--formats",
+      "csv",       "--quiet",      "--out",
+      live,        "--udp-json",   "127.0.0.1:" + std::to_string(receiver.port)};
   std::vector<char*> argv;
   for (std::string& a : arguments) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
   ASSERT_EQ(posix_spawn(&pid, S2KF_CLI, nullptr, nullptr, argv.data(), environ), 0);
-  std::this_thread::sleep_for(std::chrono::seconds(3));
+  int poses = 0;
+  for (std::string datagram; poses < 150 && receiver.receive(datagram, 60000);) ++poses;
   kill(pid, SIGINT);
   int status = 0;
   waitpid(pid, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0);
+  ASSERT_EQ(poses, 150) << "no pose came for a minute";
   const nlohmann::json summary = summary_of(live);
   EXPECT_EQ(summary["live"]["end"], "stopped by a signal");
-  EXPECT_GT(summary["frames"].get<long>(), 100);
+  EXPECT_GE(summary["frames"].get<long>(), 150);
   EXPECT_EQ(csv_rows(read_text(live + ".csv")).size(), summary["frames"].get<std::size_t>() + 1);
 }
 
