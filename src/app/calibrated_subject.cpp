@@ -21,6 +21,7 @@ namespace fs = std::filesystem;
 void apply_static_settings(const SubjectSettings& settings, calibration::CalibrationOptions& options) {
   options.static_pose_sd_rad = settings.static_sd_deg / kDegreesPerRadian;
   options.static_posture_estimated = settings.static_posture == "near";
+  options.static_upright_sd_rad = settings.static_upright_sd_deg / kDegreesPerRadian;
   const body::BodyModel base = body::mmm_body_model(1000);
   if (settings.static_pose_name.empty())
     for (const std::string& name : body::reference_pose_names())

@@ -23,6 +23,16 @@
 namespace s2kf::app {
 namespace {
 
+/// The static trial's posture where markers were placed by their motion (static_posture "auto"):
+/// every frame held exactly within kPlacedMarkersStaticSdDeg of the reference pose, the pelvis
+/// upright within the same SD. Only the pose held gives a cluster's segment the zero of its joint
+/// angles, and only the lab's vertical the body's tilt against its markers (docs/marker-sets.md).
+void hold_placed_markers_posture(SubjectSettings& settings) {
+  settings.static_posture = "exact";
+  settings.static_sd_deg = std::min(settings.static_sd_deg, kPlacedMarkersStaticSdDeg);
+  settings.static_upright_sd_deg = settings.static_sd_deg;
+}
+
 /// `value` as few digits as say it ("1750", "0.5").
 std::string number_text(double value) {
   std::ostringstream text;
@@ -187,10 +197,8 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
     SubjectSettings settings = static_trial_settings(request);
     // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held,
     // held exactly and tightly, as calibrate_static_trial does.
-    if (!prepared.choice.inferred.empty() && request.static_posture == "auto") {
-      settings.static_posture = "exact";
-      settings.static_sd_deg = std::min(settings.static_sd_deg, kPlacedMarkersStaticSdDeg);
-    }
+    if (!prepared.choice.inferred.empty() && request.static_posture == "auto")
+      hold_placed_markers_posture(settings);
     apply_static_settings(settings, options.calibration);
     options.static_trial = read_static_trial(request);
     options.calibration_may_fail = false;
@@ -337,10 +345,7 @@ CalibratedSubject calibrate_static_trial(const TrackRequest& request, const Samp
   if (set) settings.set = *set;
   // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held:
   // held exactly and tightly, or the posture trades with their offsets (docs/marker-sets.md).
-  if (set && request.static_posture == "auto") {
-    settings.static_posture = "exact";
-    settings.static_sd_deg = std::min(settings.static_sd_deg, kPlacedMarkersStaticSdDeg);
-  }
+  if (set && request.static_posture == "auto") hold_placed_markers_posture(settings);
   return calibrate_subject_file(request.static_trial, option_name(request, "static"), settings, samples,
                                 name);
 }

@@ -353,6 +353,67 @@ TEST(SubjectCalibration, AStaticTrialFixesTheGauges) {
   EXPECT_THROW(options.validate(), std::invalid_argument);
 }
 
+// A marker set whose markers all lean together (every offset turned 3 degrees about the forward
+// axis through the root, as a template fit of clusters can place them): a static trial shows the
+// same markers on an upright subject or on a leaning one with the set's offsets, since the posture
+// prior holds only the joint angles. With the upright prior (static_upright_sd_rad) the root stays
+// upright and the offsets come out near the subject's; without it they keep the lean. Placement
+// errors only; the posture held exactly, as for markers placed by their motion.
+TEST(SubjectCalibration, TheUprightPriorKeepsALeaningMarkerSetOffTheStaticTrial) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const sim::Subject subject = placement_only_subject(3);
+  const sim::KeyframeMotion still = standing_still(subject.model.joint_count());
+  sim::RecordingOptions recording_options;
+  recording_options.frames = 300;
+  const sim::Recording recording = sim::simulate_recording(still, subject, recording_options, 3);
+  body::BodyModel leaning = subject.model;
+  const body::FrameTransforms zero =
+      body::joint_frames(leaning, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(),
+                         Eigen::VectorXd::Zero(leaning.joint_count()));
+  const Eigen::Matrix3d lean =
+      Eigen::AngleAxisd(3.0 * kPi / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (body::Marker& marker : leaning.markers) {
+    const auto f = static_cast<std::size_t>(marker.frame);
+    const Eigen::Vector3d at = zero.origins[f] + zero.rotations[f] * marker.offset;
+    marker.offset = zero.rotations[f].transpose() * (lean * at - zero.origins[f]);
+  }
+  const body::MarkerMapping mapping = body::map_markers(recording.labels, leaning.marker_names());
+  const auto calibrated = [&](double upright_sd_deg) {
+    calibration::CalibrationOptions options;
+    options.final_pass = false;
+    options.estimate_segment_scales = false;
+    options.static_pose_sd_rad = 0.5 * kPi / 180.0;
+    options.static_upright_sd_rad = upright_sd_deg * kPi / 180.0;
+    return offset_error(calibration::calibrate_subject(leaning, mapping, fast_options(), recording,
+                                                       test::tracker_samples(fast_options()), options)
+                            .model,
+                        subject, false);
+  };
+  const double before = offset_error(leaning, subject, false);
+  const double free = calibrated(0.0), upright = calibrated(0.5);
+  std::cout << "offset error, gauges included: leaning marker set " << before << " mm, static trial " << free
+            << " mm with its tilt free, " << upright << " mm held upright\n";
+  // Measured: 24.8 mm as leaning, 24.8 with the tilt free, 11.5 held upright (the rest is the
+  // markers' own misplacement, 8 mm per coordinate, and the weak-direction shrinkage).
+  EXPECT_GT(free, 0.7 * before);
+  EXPECT_LT(upright, 0.6 * free);
+  calibration::CalibrationOptions bad;
+  bad.static_upright_sd_rad = -1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The lab's vertical for the upright prior: the coordinate axis, with its sign, nearest the roots'
+// vertical axes; a y-up lab gives +y, a subject leaning 20 degrees still its lab's axis.
+TEST(SubjectCalibration, TheLabsVerticalIsTheAxisNearestTheRootsVertical) {
+  const Eigen::Matrix3d y_up = Eigen::AngleAxisd(-kPi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d leaning = Eigen::AngleAxisd(20.0 * kPi / 180.0, Eigen::Vector3d::UnitZ()) * y_up *
+                                  Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY());
+  EXPECT_EQ(calibration::nearest_lab_vertical({y_up, leaning}), Eigen::Vector3d(0, 1, 0));
+  const Eigen::Matrix3d upside_down = Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  EXPECT_EQ(calibration::nearest_lab_vertical({upside_down}), Eigen::Vector3d(0, 0, -1));
+  EXPECT_EQ(calibration::nearest_lab_vertical({}), Eigen::Vector3d::Zero());
+}
+
 // People do not stand in the reference pose: a static trial held with every joint a few degrees
 // off it (SD 3 degrees, what the posture's prior says), calibrated with the default options. With
 // the posture estimated (`near`) the posture comes out nearer the one held than the reference is,

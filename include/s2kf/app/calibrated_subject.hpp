@@ -39,6 +39,9 @@ struct SubjectSettings {
   /// "near": static_sd_deg is the SD of the posture held over the trial (estimated near the
   /// reference); "exact": of every frame's angles (the reference taken as held).
   std::string static_posture = "near";
+  /// > 0: the static trial's pelvis is held upright within this SD (degrees) of the lab's vertical
+  /// (calibration::CalibrationOptions::static_upright_sd_rad); 0: its tilt is free.
+  double static_upright_sd_deg = 0;
   int threads = 1;  ///< the calibration's threads (every_core() for all)
 };
 

@@ -47,8 +47,8 @@ struct TrackRequest {
   std::string static_pose;
   /// "near": the posture held is estimated within static_sd_deg of the reference pose; "exact":
   /// every frame's angles within static_sd_deg of it; "auto": exact, within
-  /// kPlacedMarkersStaticSdDeg, where markers the set does not name were placed by their motion (a
-  /// cluster's zero comes from the pose held alone), else near.
+  /// kPlacedMarkersStaticSdDeg and the pelvis upright within as much, where markers the set does not name
+  /// were placed by their motion (a cluster's zero comes from the pose held alone), else near.
   std::string static_posture = "auto";
   /// Calibrate the static trial and the recording together (one bundle adjustment from the marker
   /// set: the static frames with the posture's prior, the recording's without), instead of tracking

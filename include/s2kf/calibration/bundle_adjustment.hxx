@@ -44,7 +44,22 @@ struct BundleFrame {
   /// The joint angles a Gaussian prior pulls this frame's towards (CalibrationOptions::
   /// static_pose_sd_rad); empty: none.
   Eigen::VectorXd prior_joints;
+  /// The lab's vertical that a Gaussian prior pulls the root's vertical axis towards
+  /// (CalibrationOptions::static_upright_sd_rad); zero: none.
+  Eigen::Vector3d prior_up = Eigen::Vector3d::Zero();
 };
+
+/// Gives the frames of the static trial (those the posture's prior holds) the lab's vertical for
+/// the upright prior, where options.static_upright_sd_rad asks for it.
+inline void hold_static_frames_upright(std::vector<BundleFrame>& frames, const CalibrationOptions& options) {
+  if (!(options.static_upright_sd_rad > 0)) return;
+  std::vector<Eigen::Matrix3d> rotations;
+  for (const BundleFrame& frame : frames)
+    if (frame.prior_joints.size() > 0) rotations.push_back(frame.rotation);
+  const Eigen::Vector3d vertical = nearest_lab_vertical(rotations);
+  for (BundleFrame& frame : frames)
+    if (frame.prior_joints.size() > 0) frame.prior_up = vertical;
+}
 
 /// RMS distance (mm) per model marker between the recording and `model` at the frames' poses,
 /// over each frame's listed markers (indices into `used`); NaN for a marker no frame lists.
@@ -379,6 +394,9 @@ class BundleAdjustment {
         if (frames[k].prior_joints.size() > 0)
           chunk_sum[static_cast<std::size_t>(c)] +=
               pose_prior_weight() * (frames[k].joints - frames[k].prior_joints).squaredNorm();
+        if (holds_upright(frames[k]))
+          chunk_sum[static_cast<std::size_t>(c)] +=
+              upright_prior_weight() * (frames[k].prior_up - frames[k].rotation.col(2)).squaredNorm();
       }
     });
     double sum = 0;
@@ -408,6 +426,15 @@ class BundleAdjustment {
   double pose_prior_weight() const {
     const double frames = options_.static_posture_estimated ? std::max<double>(pose_prior_frames_, 1) : 1.0;
     return 1.0 / (options_.static_pose_sd_rad * options_.static_pose_sd_rad * frames);
+  }
+
+  /// Whether the upright prior holds `frame`.
+  static bool holds_upright(const BundleFrame& frame) { return frame.prior_up.squaredNorm() > 0; }
+
+  /// Per frame, shared over the frames as the posture's prior is.
+  double upright_prior_weight() const {
+    const double frames = options_.static_posture_estimated ? std::max<double>(pose_prior_frames_, 1) : 1.0;
+    return 1.0 / (options_.static_upright_sd_rad * options_.static_upright_sd_rad * frames);
   }
 
   /// The used markers' offsets minus the marker set's, stacked as the subject unknowns order them.
@@ -484,6 +511,17 @@ class BundleAdjustment {
         A(kRoot + j, kRoot + j) += w;
         g(kRoot + j) += w * (frame.prior_joints(j) - frame.joints(j));
       }
+    }
+    // The upright prior on the root's vertical axis R e_z: R Exp(w) e_z = R e_z + R (w_y, -w_x, 0).
+    if (holds_upright(frame)) {
+      const double w = upright_prior_weight();
+      Eigen::Matrix3d jr;
+      jr.col(0) = -frame.rotation.col(1);
+      jr.col(1) = frame.rotation.col(0);
+      jr.col(2).setZero();
+      const Eigen::Vector3d r = frame.prior_up - frame.rotation.col(2);
+      A.block<3, 3>(3, 3).noalias() += w * jr.transpose() * jr;
+      g.segment<3>(3).noalias() += w * jr.transpose() * r;
     }
     // Active set: a joint on a limit that the gradient pushes further out stays there for this
     // step (clamping a free step afterwards would spoil the rest of it).

@@ -94,6 +94,12 @@ struct CalibrationOptions {
   /// turned about its joint against a constant offset of that joint's angles (the gauges), where
   /// otherwise the marker set's placement decides it. 0: no prior on the poses.
   double static_pose_sd_rad = 0;
+  /// > 0 (with static_pose_sd_rad > 0): the static trial's pelvis stands upright too: each of its
+  /// adjusted frames gets a Gaussian prior with this SD (rad) on the tilt of the root's vertical
+  /// axis from the lab's vertical (the coordinate axis nearest the tracked roots' vertical over the
+  /// static frames). Markers placed by their motion (clusters) show the body's tilt against the lab
+  /// only through their offsets' priors; the zero pose stands upright. 0: the tilt is free.
+  double static_upright_sd_rad = 0;
   /// The static trial's reference pose (joint angles, rad); empty: the zero pose. With more than one
   /// in static_pose_candidates, the one nearest the first tracking pass's mean posture.
   Eigen::VectorXd static_pose;
@@ -143,12 +149,28 @@ struct CalibrationOptions {
       throw std::invalid_argument("calibration: the static pose has a non-finite angle");
     for (const Eigen::VectorXd& pose : static_pose_candidates)
       if (!pose.allFinite()) throw std::invalid_argument("calibration: a static pose has a non-finite angle");
+    if (!(static_upright_sd_rad >= 0) || !std::isfinite(static_upright_sd_rad))
+      throw std::invalid_argument("calibration: the static trial's upright SD must be finite and >= 0");
     if (static_frames < 0) throw std::invalid_argument("calibration: static_frames must be >= 0");
     if (skip_frames < 0 || stride < 1)
       throw std::invalid_argument("calibration: skip_frames >= 0 and stride >= 1");
     if (threads < 1) throw std::invalid_argument("calibration: at least 1 thread is needed");
   }
 };
+
+/// The lab's vertical for frames standing upright: the coordinate axis (+-x, +-y or +-z) nearest
+/// the mean of their roots' vertical axes (a lab's floor is one of its coordinate planes, and a
+/// subject standing still leans far less than 45 deg from it); zero for no frame.
+inline Eigen::Vector3d nearest_lab_vertical(const std::vector<Eigen::Matrix3d>& root_rotations) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Matrix3d& rotation : root_rotations) mean += rotation.col(2);
+  if (!(mean.norm() > 0)) return Eigen::Vector3d::Zero();
+  Eigen::Index axis = 0;
+  mean.cwiseAbs().maxCoeff(&axis);
+  Eigen::Vector3d vertical = Eigen::Vector3d::Zero();
+  vertical(axis) = mean(axis) > 0 ? 1.0 : -1.0;
+  return vertical;
+}
 
 /// One round: a tracking pass over the recording with the model of that moment, then (except for
 /// the final pass) the bundle adjustment that starts from its poses.

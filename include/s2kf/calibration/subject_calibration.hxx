@@ -84,6 +84,7 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
       if (frames[k].markers.size() >= 3) kept.push_back(std::move(frames[k]));
     }
     if (kept.empty()) throw std::invalid_argument("calibration: no frame shows 3 or more markers");
+    detail::hold_static_frames_upright(kept, options);
     pass.frames_used = static_cast<long>(kept.size());
     adjustment.adjust(result.model, kept, pass);
     result.passes.push_back(pass);
@@ -116,6 +117,7 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
   if (frames.empty()) throw std::invalid_argument("calibration: no posed frame shows 3 or more markers");
   for (detail::BundleFrame& frame : frames)  // a moving trial calibrated with the static one: no prior
     if (!detail::in_static_trial(frame, options)) frame.prior_joints.resize(0);
+  detail::hold_static_frames_upright(frames, options);
   SubjectCalibration result;
   result.model = model;
   CalibrationPass pass;
