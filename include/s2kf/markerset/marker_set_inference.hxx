@@ -615,6 +615,17 @@ inline std::string named_cluster_segment(const std::string& stem) {
   return {};
 }
 
+/// The segment a single marker's name says where its motion hardly can: a greater trochanter
+/// (side L or R, then GT, GTR or TROC: LGT, RGTR) rides on the thigh, though it sits at the hip
+/// joint, where the pelvis carries it nearly as steadily. "" where the name says nothing.
+inline std::string named_marker_segment(const std::string& label) {
+  const std::string name = upper_case(label);
+  if (name.size() < 3 || (name[0] != 'L' && name[0] != 'R')) return {};
+  const std::string kind = name.substr(1);
+  if (kind == "GT" || kind == "GTR" || kind == "TROC") return std::string(1, name[0]) + "H";
+  return {};
+}
+
 /// A cluster's markers keep their mutual distances within this (median SD, mm): soft tissue moves
 /// the simulated subjects' markers by 8 mm each, a joint between two of them by centimetres.
 inline constexpr double kClusterSteadySdMm = 20.0;
@@ -937,6 +948,15 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
       const double own = a.spread.spread(row, a.frame_of[i]);
       if (std::isfinite(own) && (own < options.rigid_spread_mm || !(best_spread < options.move_ratio * own)))
         best_frame = a.frame_of[i];
+      // Its name decides where the motion does not separate the named segment from the steadiest.
+      const std::string named = named_marker_segment(c.label(c.points[i]));
+      if (!named.empty() && body::segment_of_frame(c.base, best_frame) != named) {
+        const int on_named = steadiest_frame_on(c, a, i, named);
+        const double named_spread = a.spread.spread(row, on_named);
+        if (neighbours(a.frame_of[i], on_named) && std::isfinite(named_spread) &&
+            named_spread * options.move_ratio < std::min(best_spread, std::isfinite(own) ? own : best_spread))
+          best_frame = on_named;
+      }
       if (best_frame == a.frame_of[i]) {
         if ((from_motion(best_frame) || !a.standing[i]) && std::isfinite(own)) {
           if (from_motion(best_frame)) a.standing[i].reset();
