@@ -177,8 +177,8 @@ TEST(MixedMarkerSets, AStaticTrialGivesTheClusterModelTheZeroOfItsJointAngles) {
 
 // With markers placed by their motion, `--static-posture auto` holds the static trial's posture
 // within 0.5 degrees of the zero pose, not the 3 of `--static-sd`: looser, the posture trades with
-// the clusters' offsets, and the deep flexion of squats shows it (seed 2: the knees 2.2 against 3.1
-// deg RMS held within 3 degrees).
+// the clusters' offsets, and the deep flexion of squats shows it (seed 2: the knees 2.0 against 3.1
+// deg RMS held within 3 degrees; 2.2 before auto also held the pelvis upright).
 TEST(MixedMarkerSets, PlacedMarkersHoldTheStaticPostureTightly) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const std::string clusters = data_file("simulation/plugin_gait_upper_clusters.json");
