@@ -8,6 +8,7 @@
 #include <s2kf/app/track_summary.hpp>
 #include <s2kf/app/user_error.hpp>
 
+#include <s2kf/body/reference_poses.hpp>
 #include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/c3d_reader.hpp>
@@ -23,14 +24,22 @@
 namespace s2kf::app {
 namespace {
 
+/// Whether the static trial's pose (--static-pose; empty: the nearest reference pose) stands upright.
+bool standing_pose(const std::string& static_pose_name) {
+  const std::vector<std::string> standing = body::reference_pose_names();
+  return static_pose_name.empty() ||
+         std::find(standing.begin(), standing.end(), static_pose_name) != standing.end();
+}
+
 /// The static trial's posture where markers were placed by their motion (static_posture "auto"):
 /// every frame held exactly within kPlacedMarkersStaticSdDeg of the reference pose, the pelvis
-/// upright within the same SD. Only the pose held gives a cluster's segment the zero of its joint
-/// angles, and only the lab's vertical the body's tilt against its markers (docs/marker-sets.md).
+/// upright within the same SD where the pose is a standing reference pose (not a pose CSV, which
+/// may sit or lean). Only the pose held gives a cluster's segment the zero of its joint angles, and
+/// only the lab's vertical the body's tilt against its markers (docs/marker-sets.md).
 void hold_placed_markers_posture(SubjectSettings& settings) {
   settings.static_posture = "exact";
   settings.static_sd_deg = std::min(settings.static_sd_deg, kPlacedMarkersStaticSdDeg);
-  settings.static_upright_sd_deg = settings.static_sd_deg;
+  if (standing_pose(settings.static_pose_name)) settings.static_upright_sd_deg = settings.static_sd_deg;
 }
 
 /// `value` as few digits as say it ("1750", "0.5").
