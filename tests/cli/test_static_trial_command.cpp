@@ -21,6 +21,13 @@ namespace {
 using namespace s2kf;
 namespace fs = std::filesystem;
 
+/// This test's own folder: ctest runs the tests side by side, and two simulating the same trial into
+/// one folder would rename each other's temporary files away.
+fs::path test_folder() {
+  return fs::path(s2kf::test_support::tmp_dir()) / "static_pose" /
+         ::testing::UnitTest::GetInstance()->current_test_info()->name();
+}
+
 /// A static trial in the T-pose (the bundled static motion, its sway included, with the upper arms
 /// 90 degrees out), simulated once into `dir`.
 std::string t_pose_trial(const fs::path& dir) {
@@ -49,7 +56,7 @@ nlohmann::json read_json(const fs::path& path) {
 
 TEST(StaticTrialCommand, ThePoseHeldIsFoundFromTheData) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
+  const fs::path dir = test_folder();
   const std::string trial = t_pose_trial(dir);
   const auto [status, output] =
       test_support::run_command("calibrate " + trial + " --static --out " + (dir / "found.json").string());
@@ -72,7 +79,7 @@ TEST(StaticTrialCommand, ThePoseHeldIsFoundFromTheData) {
 // markers would have to sit half a metre from where the marker set puts them.
 TEST(StaticTrialCommand, AWrongStanceIsRefusedAndWritesNoSubject) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
+  const fs::path dir = test_folder();
   const std::string trial = t_pose_trial(dir);
   const fs::path subject = dir / "wrong.json";
   const auto [status, output] = test_support::run_command(
@@ -96,7 +103,7 @@ TEST(StaticTrialCommand, AWrongStanceIsRefusedAndWritesNoSubject) {
 // calibrated together with the recording, and says so; --no-static-stretch does not.
 TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
+  const fs::path dir = test_folder();
   const std::string trial = t_pose_trial(dir);
   const auto messages = [&](const std::string& name, const std::string& options) {
     const auto [status, output] = test_support::run_command("track " + trial + " --formats csv --quiet " +
@@ -122,7 +129,7 @@ TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
 // in a stance the calibration is told wrongly is refused as with --static alone, writing nothing.
 TEST(StaticTrialCommand, RefineCalibratesTheStaticTrialAndTheRecordingTogether) {
   S2KF_SKIP_UNDER_SANITIZERS();
-  const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose";
+  const fs::path dir = test_folder();
   const std::string trial = t_pose_trial(dir);
   const std::string walk = (dir / "walk.c3d").string();
   const auto [simulated, simulate_output] =
