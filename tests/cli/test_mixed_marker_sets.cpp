@@ -247,8 +247,9 @@ TEST(MixedMarkerSets, RenamedFootClustersRideOnTheFeetNotTheShanks) {
       {"RTB", {"RQT", "RK"}},   {"LFT", {"LQF", "LA"}}, {"RFT", {"RQF", "RA"}}};
   for (const auto& [name, motion] : {std::pair<std::string, std::string>{"clusters2", "walk --seed 2"},
                                      {"jumping_jacks3", "jumping_jacks --seed 3"}}) {
+    // A simulation of its own (the other tests simulate these motions too, side by side under ctest).
     const std::string original = test_support::simulate_with_program(
-        name, "--motion " + motion + " --frames 400 --markerset " + clusters);
+        name + "_for_renaming", "--motion " + motion + " --frames 400 --markerset " + clusters);
     const MarkerSequence recording = c3d::read_c3d(original + ".c3d");
     std::vector<std::string> labels = recording.labels;
     for (std::string& label : labels)
