@@ -9,8 +9,10 @@ the motion three ways against its truth:
   no-stretch  the same with --no-static-stretch
   static   s2kf calibrate STATIC --static; s2kf track REC --subject SUBJECT
   both     the same subject as --markerset: calibrated again on the recording, starting from it
-  track    s2kf track REC --static STATIC [--static-options]  (what a user runs)
-  refine   s2kf track REC --static STATIC --static-refine [--static-options]
+  track    s2kf track REC --static STATIC [--static-options]  (what a user runs: the static trial
+           and the recording calibrated together)
+  alone    s2kf track REC --static STATIC --static-alone [--static-options]  (calibrated on the
+           static trial alone)
 
 --lead-in starts every motion with the seed's static trial (its stance, 3 s) and a 1 s step from it
 into the motion: a static trial inside the recording, which `s2kf track` finds by itself (config
@@ -45,12 +47,12 @@ parser.add_argument("--static-motion", default="static", help="the static trial'
 parser.add_argument("--out", default="results/static-trial")
 parser.add_argument("--raw", default="", help="write every run's figures to this JSON file")
 parser.add_argument("--extra", default="", help="more options for every s2kf track, space-separated (--smooth)")
-parser.add_argument("--configs", default="default,static,both", help="of default, no-stretch, static, both, track, refine")
+parser.add_argument("--configs", default="default,static,both", help="of default, no-stretch, static, both, track, alone")
 parser.add_argument("--stance", default="zero", help="the static trial's reference pose: zero, t-pose, a-pose")
 parser.add_argument("--stance-sd", type=float, default=0.0, help="SD (deg) of each joint's offset from it")
 parser.add_argument("--markerset", default="", help="the markers the simulated subject wears (plugin_gait, cmu)")
 parser.add_argument("--lead-in", action="store_true", help="every motion starts with the static trial")
-parser.add_argument("--static-options", default="", help="more options for --static (track, refine), space-separated")
+parser.add_argument("--static-options", default="", help="more options for --static (track, alone), space-separated")
 args = parser.parse_args()
 CONFIGS = tuple(args.configs.split(","))
 PAPER_OCCLUSION = "0.005,100"
@@ -133,7 +135,7 @@ for seed in args.seeds.split(","):
             for config in CONFIGS:
                 option = {"default": [], "no-stretch": ["--no-static-stretch"], "static": ["--subject", subject], "both": ["--markerset", subject],
                           "track": ["--static", static, *args.static_options.split()],
-                          "refine": ["--static", static, "--static-refine", *args.static_options.split()]}[config]
+                          "alone": ["--static", static, "--static-alone", *args.static_options.split()]}[config]
                 prefix = f"{base}_{config}"
                 run("track", base + ".c3d", "--truth", base + "_truth.csv", *option, *args.extra.split(),
                     "--formats", "csv", "--quiet", "--out", prefix)

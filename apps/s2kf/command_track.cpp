@@ -58,6 +58,8 @@ void run_track(const TrackSettings& given) {
   TrackSettings settings = given;
   app::TrackRequest& request = settings.request;
   check_request(request);  // before any file is looked at
+  if (const std::string deprecated = app::deprecation_warning(request); !deprecated.empty())
+    std::cerr << "s2kf: warning: " << deprecated << "\n";
   const std::vector<Recording> recordings = find_recordings(settings.inputs);
   const bool batch = recordings.size() > 1 || !settings.shard.empty() ||
                      std::any_of(settings.inputs.begin(), settings.inputs.end(),
@@ -79,8 +81,9 @@ void run_track(const TrackSettings& given) {
     for (std::size_t i = 0; i < todo.size(); ++i) std::cout << todo[i].input << " -> " << prefixes[i] << "\n";
     return;
   }
-  // --static-refine: each recording is calibrated together with the static trial (app::prepare_track).
-  const std::string static_trial = request.static_refine ? std::string() : request.static_trial;
+  // --static: each recording is calibrated together with the static trial (app::prepare_track),
+  // its subject written as PREFIX_subject.json (track_file); --static-alone calibrates here first.
+  const std::string static_trial = request.static_alone ? request.static_trial : std::string();
   if (!static_trial.empty()) {
     // One subject for every recording: PREFIX_subject.json beside one recording's outputs, else
     // STATIC-NAME_subject.json in the output folder. The recordings are then tracked with it as
@@ -95,6 +98,7 @@ void run_track(const TrackSettings& given) {
     request.markerset.clear();
     settings.placed_for_static = std::move(placed);  // listed in each summary
     request.static_trial.clear();
+    request.static_alone = false;
   }
   if (!batch) {
     if (fs::path(prefixes[0]).has_parent_path()) fs::create_directories(fs::path(prefixes[0]).parent_path());
@@ -154,9 +158,14 @@ const RegisterCommand track_registration{
                      "calibrated subject file written by s2kf calibrate");
       app.add_option("--static", settings->request.static_trial,
                      "C3D static trial of the same subject standing still in a reference pose "
-                     "(--static-pose): calibrate the subject on it first (as s2kf calibrate --static, "
-                     "written as PREFIX_subject.json) and track with it, which also fixes the placement "
-                     "no moving recording shows (hands, forearms, feet)");
+                     "(--static-pose): calibrate the subject on it and each recording together, in one "
+                     "bundle adjustment (the static trial fixes the placement no moving recording shows: "
+                     "hands, forearms, feet; the recording's bending joints the rest), written as "
+                     "PREFIX_subject.json");
+      app.add_flag("--static-alone", settings->request.static_alone,
+                   "with --static: calibrate the subject on the static trial alone (as s2kf calibrate "
+                   "--static), write it as PREFIX_subject.json (a batch: STATIC_subject.json) and track "
+                   "every recording with it as with --subject");  // without --static: app::check_request
       app.add_option("--static-sd", settings->request.static_sd_deg,
                      "with --static or a static stretch: how far (SD, degrees) each joint may be from the "
                      "reference pose")
@@ -170,10 +179,8 @@ const RegisterCommand track_registration{
                      "--static-sd if less, and the pelvis upright within as much, where markers the set "
                      "does not name were placed by their motion, else near)")
           ->check(CLI::IsMember({"auto", "near", "exact"}));
-      app.add_flag("--static-refine", settings->request.static_refine,
-                   "with --static: calibrate the static trial and each recording together, in one bundle "
-                   "adjustment (the static trial fixes what no motion shows, the recording's bending "
-                   "joints the rest)");  // without --static: app::check_request's sentence
+      // Deprecated (what --static does now): hidden, and run_track says what replaced it.
+      app.add_flag("--static-refine", settings->request.static_refine)->group("");
       app.add_flag("!--no-static-stretch", settings->request.static_stretch,
                    "without --static: do not take a stretch of the recording in which the subject stands "
                    "still (1 s or more) in a reference pose as its static trial (default: it is, and "

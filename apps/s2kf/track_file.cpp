@@ -192,6 +192,10 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
       throw UserError("--truth: " + settings.request.truth + ": " + e.what());
     }
   }
+  // --static: the subject calibrated on the static trial and this recording, for --subject.
+  const std::optional<nlohmann::json> subject = app::joint_subject_document(
+      prepared, run, settings.request, fs::path(prefix).filename().string() + "_subject");
+  if (subject) motion_files.companion(prefix + "_subject.json") << subject->dump(2) << "\n";
   nlohmann::json summary =
       app::summarize_track(prepared, run, settings.request, written ? &*written : nullptr, outside);
   if (settings.realtime) summary["deadline_misses"] = deadline_misses;
@@ -210,6 +214,7 @@ TrackOutcome track_source(const TrackInput& input, const std::string& prefix, co
   if (!warnings.empty())
     paragraph << " " << warnings.size() << " warning(s), listed in " << prefix << ".json.";
   paragraph << "\n" << written_files_sentence(prefix, settings.outputs);
+  if (subject) paragraph << ", the subject " << prefix << "_subject.json";
   if (settings.html) paragraph << ", the 3D page " << prefix << ".html";
   if (!figure_file.empty()) paragraph << ", and the figure " << figure_file;
   paragraph << ".";

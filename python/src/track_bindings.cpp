@@ -337,11 +337,12 @@ void bind_track(py::module_& module) {
       [](const py::object& recording, const py::object& labels, const py::object& rate,
          const py::object& markerset, const py::object& subject, const py::object& static_trial,
          double static_sd, const py::object& static_pose, const std::string& static_posture,
-         bool static_refine, bool static_stretch, bool calibrate, std::int64_t calibration_frames,
-         int calibration_samples, double calibration_shrink, bool uniform_noise, bool smooth, int samples,
-         double height, const py::object& height_mm, const std::string& preset,
-         const std::string& motion_model, const std::string& gain, const std::string& method,
-         const py::object& truth, bool force, const py::object& model_output, const py::object& name) {
+         bool static_alone, const py::object& static_refine, bool static_stretch, bool calibrate,
+         std::int64_t calibration_frames, int calibration_samples, double calibration_shrink,
+         bool uniform_noise, bool smooth, int samples, double height, const py::object& height_mm,
+         const std::string& preset, const std::string& motion_model, const std::string& gain,
+         const std::string& method, const py::object& truth, bool force, const py::object& model_output,
+         const py::object& name) {
         const auto text = [](const py::object& value) {
           return value.is_none() ? std::string() : py::str(value).cast<std::string>();
         };
@@ -353,7 +354,11 @@ void bind_track(py::module_& module) {
         request.static_sd_deg = static_sd;
         request.static_pose = text(static_pose);
         request.static_posture = static_posture;
-        request.static_refine = static_refine;
+        request.static_alone = static_alone;
+        request.static_refine = !static_refine.is_none() && static_refine.cast<bool>();
+        if (const std::string deprecated = app::deprecation_warning(request); !deprecated.empty())
+          if (PyErr_WarnEx(PyExc_DeprecationWarning, deprecated.c_str(), 1) != 0)
+            throw py::error_already_set();
         request.static_stretch = static_stretch;
         request.calibrate = calibrate;
         request.calibration_frames = static_cast<long>(calibration_frames);
@@ -375,9 +380,9 @@ void bind_track(py::module_& module) {
       py::arg("recording"), py::arg("labels") = py::none(), py::arg("rate") = py::none(), py::kw_only(),
       py::arg("markerset") = py::none(), py::arg("subject") = py::none(), py::arg("static") = py::none(),
       py::arg("static_sd") = defaults.static_sd_deg, py::arg("static_pose") = py::none(),
-      py::arg("static_posture") = defaults.static_posture, py::arg("static_refine") = defaults.static_refine,
-      py::arg("static_stretch") = defaults.static_stretch, py::arg("calibrate") = defaults.calibrate,
-      py::arg("calibration_frames") = defaults.calibration_frames,
+      py::arg("static_posture") = defaults.static_posture, py::arg("static_alone") = defaults.static_alone,
+      py::arg("static_refine") = py::none(), py::arg("static_stretch") = defaults.static_stretch,
+      py::arg("calibrate") = defaults.calibrate, py::arg("calibration_frames") = defaults.calibration_frames,
       py::arg("calibration_samples") = defaults.calibration_samples,
       py::arg("calibration_shrink") = defaults.calibration_shrink,
       py::arg("uniform_noise") = defaults.uniform_noise, py::arg("smooth") = defaults.smooth,
@@ -390,12 +395,14 @@ void bind_track(py::module_& module) {
       "underscores, the same defaults): track('walk.c3d'), track(s2kf.read_c3d(...)), or track(points, "
       "labels, rate) with points (F, P, 3) in mm, NaN where hidden. markerset: 'kit', 'cmu', "
       "'plugin_gait' or a .json file (default: the best match); subject: a calibrated subject file; "
-      "static: a C3D static trial, on which the subject is calibrated first (static_pose: the pose held, "
+      "static: a C3D static trial, on which the subject is calibrated together with the recording "
+      "(static_alone=True: on the static trial alone, then the recording tracked with it; static_pose: "
+      "the pose held, "
       "'zero', 't-pose', 'a-pose' or a pose CSV, default: the nearest one; static_sd: each joint's SD "
       "from it, degrees; static_posture: 'near', the posture held estimated near the pose, 'exact', or "
       "'auto' (exact, the pelvis "
       "upright, where markers were placed by their motion, else near); "
-      "static_refine: calibrate the static trial and the recording together); static_stretch: without "
+      "static_refine: deprecated, what static does now); static_stretch: without "
       "static, a stretch of the recording where the subject stands still in a reference pose is its "
       "static trial; calibrate: fit the subject's "
       "offsets and bone lengths on calibration_frames frames spread over the recording (calibration_samples: "

@@ -191,13 +191,13 @@ def test_bad_files_are_os_errors(tmp_path):
         s2kf.track(str(tmp_path / "text.c3d"))
 
 
-def test_a_static_trial_calibrates_the_subject_first(cli, tmp_path):
-    """static= does what `s2kf calibrate --static` and then subject= do, in one call."""
+def test_a_static_trial_alone_calibrates_the_subject_first(cli, tmp_path):
+    """static= with static_alone=True does what `s2kf calibrate --static` and then subject= do, in one call."""
     static, walk = tmp_path / "static.c3d", tmp_path / "walk.c3d"
     cli("simulate", "--motion", "static", "--seed", "5", "--out", static)
     cli("simulate", "--motion", "walk", "--seed", "5", "--frames", "150", "--out", walk)
     cli("calibrate", static, "--static", "--quiet", "--out", tmp_path / "subject.json")
-    one_step = s2kf.track(str(walk), static=str(static))
+    one_step = s2kf.track(str(walk), static=str(static), static_alone=True)
     two_steps = s2kf.track(str(walk), subject=str(tmp_path / "subject.json"))
     np.testing.assert_array_equal(one_step.poses, two_steps.poses)
     assert one_step.summary["marker_set_source"] == f"calibrated on the static trial {static}"
@@ -211,27 +211,31 @@ def test_a_static_trial_calibrates_the_subject_first(cli, tmp_path):
 
 
 def test_the_static_keywords_are_the_programs(cli, tmp_path):
-    """static_refine, static_stretch, static_pose and static_posture do what the program's options do."""
+    """static (with the recording), static_alone, static_stretch, static_pose and static_posture do what
+    the program's options do; static_refine, deprecated, says what replaced it."""
     static, walk = tmp_path / "static.c3d", tmp_path / "walk.c3d"
     cli("simulate", "--motion", "static", "--seed", "5", "--out", static)
     cli("simulate", "--motion", "walk", "--seed", "5", "--frames", "150", "--out", walk)
-    # The static trial and the walk calibrated together, as `s2kf track --static-refine`.
-    refined = s2kf.track(str(walk), static=str(static), static_refine=True)
-    cli("track", walk, "--static", static, "--static-refine", "--quiet", "--formats", "csv",
-        "--out", tmp_path / "cli")
+    # The static trial and the walk calibrated together, as `s2kf track --static`.
+    refined = s2kf.track(str(walk), static=str(static))
+    cli("track", walk, "--static", static, "--quiet", "--formats", "csv", "--out", tmp_path / "cli")
     refined.to_csv(str(tmp_path / "py.csv"))  # both as written (9 digits)
     ours, theirs = (np.genfromtxt(tmp_path / f"{n}.csv", delimiter=",", skip_header=1) for n in ("py", "cli"))
     np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-9)
-    unrefined = s2kf.track(str(walk), static=str(static))  # the comparison can fail: refining moves the joints
-    assert np.nanmax(np.abs(unrefined.joints - refined.joints)) > 1e-3
+    alone = s2kf.track(str(walk), static=str(static), static_alone=True)  # the comparison can fail
+    assert np.nanmax(np.abs(alone.joints - refined.joints)) > 1e-3
     assert refined.summary["calibration"] is not None
+    assert alone.summary["calibration"] is None
+    with pytest.warns(DeprecationWarning, match="static_refine is deprecated: .* is what static does now"):
+        deprecated = s2kf.track(str(walk), static=str(static), static_refine=True)
+    np.testing.assert_array_equal(deprecated.joints, refined.joints)
     # The still recording is its own static trial unless static_stretch=False.
     still = s2kf.track(str(static), static_pose="zero")
     assert any("are a static trial in the zero pose" in m for m in still.summary["marker_set_messages"])
     plain = s2kf.track(str(static), static_stretch=False)
     assert not any("static trial" in m for m in plain.summary["marker_set_messages"])
-    with pytest.raises(ValueError, match="static_refine calibrates the static trial and the recording together; it needs static"):
-        s2kf.track(str(walk), static_refine=True)
+    with pytest.raises(ValueError, match="static_alone calibrates the subject on the static trial alone; it needs static"):
+        s2kf.track(str(walk), static_alone=True)
     with pytest.raises(ValueError, match="static_posture must be 'auto', 'near' or 'exact'"):
         s2kf.track(str(walk), static=str(static), static_posture="close")
     with pytest.raises(ValueError, match="static_pose: 'y-pose' is neither zero, t-pose, a-pose"):

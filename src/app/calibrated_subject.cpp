@@ -149,14 +149,19 @@ void write_subject_file(const std::string& path, const nlohmann::json& document)
 }
 
 nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::string& input) {
-  nlohmann::json document = marker_set_to_json(calibrated.subject);
   const calibration::SubjectCalibration& calibration = *calibrated.session.calibration;
+  return subject_document(calibrated.subject, calibration.mean_marker_distance_before_mm,
+                          calibration.mean_marker_distance_after_mm,
+                          std::filesystem::path(input).filename().string());
+}
+
+nlohmann::json subject_document(const body::MarkerSet& subject, double before_mm, double after_mm,
+                                const std::string& inputs) {
+  nlohmann::json document = marker_set_to_json(subject);
   // The loader rejects unknown keys, so the subject file carries only a one-line summary of the
   // calibration in its description.
-  document["description"] = calibrated.subject.description + " on " +
-                            std::filesystem::path(input).filename().string() + "; mean marker distance " +
-                            fixed_text(calibration.mean_marker_distance_before_mm, 1) + " mm before, " +
-                            fixed_text(calibration.mean_marker_distance_after_mm, 1) + " mm after";
+  document["description"] = subject.description + " on " + inputs + "; mean marker distance " +
+                            fixed_text(before_mm, 1) + " mm before, " + fixed_text(after_mm, 1) + " mm after";
   return document;
 }
 

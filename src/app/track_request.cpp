@@ -73,6 +73,13 @@ std::string option_name(const TrackRequest& request, const std::string& dashed) 
   return name;
 }
 
+std::string deprecation_warning(const TrackRequest& request) {
+  if (!request.static_refine) return "";
+  return option_name(request, "static-refine") + " is deprecated: calibrating the static trial and the " +
+         "recording together is what " + option_name(request, "static") + " does now (" +
+         option_name(request, "static-alone") + " calibrates on the static trial alone)";
+}
+
 std::string not_a_body_remedy(const TrackRequest& request) {
   return request.names == OptionNames::program
              ? "give a marker set with --markerset, or track it anyway with --force"
@@ -127,6 +134,13 @@ void check_request(const TrackRequest& r) {
   if (r.static_refine && r.static_trial.empty())
     throw UserError(name("static-refine") +
                     " calibrates the static trial and the recording together; it needs " + name("static"));
+  if (r.static_alone && r.static_trial.empty())
+    throw UserError(name("static-alone") + " calibrates the subject on the static trial alone; it needs " +
+                    name("static"));
+  if (r.static_alone && r.static_refine)
+    throw UserError("give " + name("static-alone") + " or " + name("static-refine") + ", not both (" +
+                    name("static-refine") + " is what " + name("static") + " does without " +
+                    name("static-alone") + ")");
   if (!r.static_trial.empty() && !r.calibrate)
     throw UserError(name("static") +
                     " calibrates the subject on the static trial; it cannot be combined with " +
@@ -150,9 +164,8 @@ pipeline::SessionOptions session_options(const TrackRequest& request, double rat
   pipeline::SessionOptions options;
   options.tracker = tracker_options(request, rate_hz);
   options.height_mm = request.height_mm;
-  // With a static trial the recording is calibrated again only when asked (static_refine).
-  options.calibrate =
-      request.calibrate && request.subject.empty() && (request.static_trial.empty() || request.static_refine);
+  // With a static trial the recording is calibrated together with it, unless static_alone.
+  options.calibrate = request.calibrate && request.subject.empty() && !request.static_alone;
   options.calibration_frames = request.calibration_frames;
   options.calibration.weak_direction_shrink = request.calibration_shrink;
   options.calibration.threads = request.calibration_threads > 0 ? request.calibration_threads : every_core();
@@ -199,7 +212,7 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
                                             not_a_body_remedy(request))
                : choose_marker_set_for(source.labels(), request.markerset, request.subject);
   };
-  if (!request.static_trial.empty() && request.static_refine) {
+  if (!request.static_trial.empty() && !request.static_alone) {
     // The static trial and the recording calibrated together (one bundle adjustment from the
     // marker set): the static frames fix the gauges, the moving ones what bending joints show.
     prepared.choice = choose_set();  // no subject beside a static trial (check_request)
@@ -245,7 +258,7 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   if (request.static_stretch && options.calibrate && request.static_trial.empty() && frames > 0) {
     StretchSubject stretch = static_stretch_subject(source, input, prepared.choice, request, prepared.samples,
                                                     options.calibration.threads);
-    if (stretch.subject) {  // calibrated together with the recording, as --static-refine does
+    if (stretch.subject) {  // calibrated together with the recording, as --static does
       apply_static_settings(static_trial_settings(request), options.calibration);
       options.static_trial = std::move(stretch.frames);
     }
@@ -276,6 +289,23 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   if (!stretch_message.empty())
     prepared.messages.push_back(std::filesystem::path(input).filename().string() + ": " + stretch_message);
   return prepared;
+}
+
+std::optional<nlohmann::json> joint_subject_document(const PreparedTrack& prepared,
+                                                     const track::TrackingRun& run,
+                                                     const TrackRequest& request, const std::string& name) {
+  if (request.static_trial.empty() || request.static_alone || !prepared.session.calibration)
+    return std::nullopt;
+  const calibration::SubjectCalibration& calibration = *prepared.session.calibration;
+  body::MarkerSet subject =
+      subject_marker_set(prepared.choice.set, calibration.model, calibration.segment_scale,
+                         prepared.session.tracker.marker_noise_mm_per_marker, name);
+  subject.description =
+      "subject calibrated by s2kf track --static from the marker set " + prepared.choice.set.name;
+  return subject_document(subject, calibration.mean_marker_distance_before_mm,
+                          pipeline::calibrated_distance_mm(prepared.session, run),
+                          std::filesystem::path(request.static_trial).filename().string() + " and " +
+                              std::filesystem::path(prepared.input).filename().string());
 }
 
 track::TrackingRun run_track(PreparedTrack& prepared, FrameSource& source, const TrackRequest& request,

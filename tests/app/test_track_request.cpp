@@ -49,6 +49,7 @@ TEST(TrackRequest, EachValueOutOfRangeIsNamedAsTheFrontEndSpellsIt) {
       {"method", [](TrackRequest& r) { r.method = "ukf"; }},
       {"static-posture", [](TrackRequest& r) { r.static_posture = "loose"; }},
       {"static-refine", [](TrackRequest& r) { r.static_refine = true; }},
+      {"static-alone", [](TrackRequest& r) { r.static_alone = true; }},
   };
   for (const Case& c : cases) {
     TrackRequest request;
@@ -81,6 +82,25 @@ TEST(TrackRequest, ContradictionsAreRefusedNamingBothSides) {
   smoothed_baseline.smooth = true;
   smoothed_baseline.method = "baseline";
   EXPECT_NE(refusal(smoothed_baseline, OptionNames::python).find("method='baseline'"), std::string::npos);
+  TrackRequest alone_and_joint;
+  alone_and_joint.static_trial = "static.c3d";
+  alone_and_joint.static_alone = true;
+  alone_and_joint.static_refine = true;
+  EXPECT_NE(
+      refusal(alone_and_joint, OptionNames::program).find("give --static-alone or --static-refine, not both"),
+      std::string::npos);
+  // The deprecated --static-refine says what replaced it, in the front end's words.
+  TrackRequest deprecated;
+  EXPECT_EQ(s2kf::app::deprecation_warning(deprecated), "");
+  deprecated.static_trial = "static.c3d";
+  deprecated.static_refine = true;
+  EXPECT_EQ(refusal(deprecated, OptionNames::program), "");
+  EXPECT_EQ(s2kf::app::deprecation_warning(deprecated),
+            "--static-refine is deprecated: calibrating the static trial and the recording together is what "
+            "--static does now (--static-alone calibrates on the static trial alone)");
+  deprecated.names = OptionNames::python;
+  EXPECT_NE(s2kf::app::deprecation_warning(deprecated).find("static_refine is deprecated"),
+            std::string::npos);
   // Choices are listed; a removed gain says what replaced it.
   TrackRequest removed;
   removed.gain = "information-form-root-products";
@@ -106,14 +126,16 @@ TEST(TrackRequest, SessionOptionsCarryTheRequest) {
   EXPECT_EQ(options.calibration.threads, 1);
   EXPECT_FALSE(options.noise_from_calibration);
   EXPECT_TRUE(options.calibrate);
-  // A subject file is calibrated already; a static trial calibrates the recording again only when asked.
+  // A subject file is calibrated already; a static trial is calibrated together with the recording
+  // unless it is to be calibrated alone.
   request.subject = "subject.json";
   EXPECT_FALSE(s2kf::app::session_options(request, 120.0).calibrate);
   request.subject.clear();
   request.static_trial = "static.c3d";
-  EXPECT_FALSE(s2kf::app::session_options(request, 120.0).calibrate);
-  request.static_refine = true;
   EXPECT_TRUE(s2kf::app::session_options(request, 120.0).calibrate);
+  request.static_alone = true;
+  EXPECT_FALSE(s2kf::app::session_options(request, 120.0).calibrate);
+  request.static_alone = false;
   // The preset's noise follows the rate; the request's sample count replaces the preset's.
   request.preset = "paper";
   EXPECT_EQ(s2kf::app::tracker_options(request, 100.0).samples, 51);

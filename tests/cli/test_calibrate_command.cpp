@@ -149,11 +149,13 @@ TEST(CalibrateCommand, StaticTrialIsCalibratedInTheZeroPose) {
 
 namespace {
 
-// `s2kf track REC --static STATIC`: the subject is calibrated on the static trial first, written
-// as PREFIX_subject.json, and is the one `s2kf calibrate STATIC --static` writes; the recording is
-// then tracked with it as with --subject (the same accuracy against the truth). Combinations that
-// cannot work and a missing static trial are refused by name and leave no output.
-TEST(CalibrateCommand, TrackWithAStaticTrialCalibratesOnItFirst) {
+// `s2kf track REC --static STATIC --static-alone`: the subject is calibrated on the static trial
+// first, written as PREFIX_subject.json, and is the one `s2kf calibrate STATIC --static` writes;
+// the recording is then tracked with it as with --subject (the same accuracy against the truth).
+// Without --static-alone the static trial and the recording are calibrated together, and the
+// PREFIX_subject.json written then tracks the recording as that run did. Combinations that cannot
+// work and a missing static trial are refused by name and leave no output.
+TEST(CalibrateCommand, TrackWithAStaticTrialWritesItsSubject) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "track_static";
   fs::create_directories(dir);
@@ -166,8 +168,9 @@ TEST(CalibrateCommand, TrackWithAStaticTrialCalibratesOnItFirst) {
     ASSERT_EQ(status, 0) << command << "\n" << output;
   }
   const std::string common = " --truth " + walk + "_truth.csv --formats csv --quiet --out ";
-  const auto [one, one_output] = test_support::run_command("track " + walk + ".c3d --static " + static_trial +
-                                                           common + (dir / "one").string());
+  const auto [one, one_output] =
+      test_support::run_command("track " + walk + ".c3d --static " + static_trial + " --static-alone" +
+                                common + (dir / "one").string());
   ASSERT_EQ(one, 0) << one_output;
   const auto [two, two_output] =
       test_support::run_command("track " + walk + ".c3d --subject " + (dir / "subject.json").string() +
@@ -184,6 +187,26 @@ TEST(CalibrateCommand, TrackWithAStaticTrialCalibratesOnItFirst) {
   };
   EXPECT_DOUBLE_EQ(truth_of("one")["segment_orientation_rms_deg"].get<double>(),
                    truth_of("two")["segment_orientation_rms_deg"].get<double>());
+  // Calibrated together: a subject of its own (not the static trial's), which reproduces the run.
+  const auto [joint, joint_output] = test_support::run_command(
+      "track " + walk + ".c3d --static " + static_trial + common + (dir / "joint").string());
+  ASSERT_EQ(joint, 0) << joint_output;
+  const auto [again, again_output] =
+      test_support::run_command("track " + walk + ".c3d --subject " + (dir / "joint_subject.json").string() +
+                                common + (dir / "again").string());
+  ASSERT_EQ(again, 0) << again_output;
+  const body::MarkerSet joint_subject = app::load_marker_set(dir / "joint_subject.json");
+  ASSERT_EQ(joint_subject.entries.size(), calibrated.entries.size());
+  double moved = 0;
+  for (std::size_t m = 0; m < joint_subject.entries.size(); ++m)
+    moved = std::max(moved, (joint_subject.entries[m].offset - calibrated.entries[m].offset).norm());
+  EXPECT_GT(moved, 1.0);  // mm: the walk moved some markers
+  EXPECT_NE(joint_subject.description.find("on static.c3d and walk.c3d"), std::string::npos)
+      << joint_subject.description;
+  EXPECT_DOUBLE_EQ(truth_of("joint")["segment_orientation_rms_deg"].get<double>(),
+                   truth_of("again")["segment_orientation_rms_deg"].get<double>());
+  EXPECT_DOUBLE_EQ(truth_of("joint")["limb_flexion_rms_deg"].get<double>(),
+                   truth_of("again")["limb_flexion_rms_deg"].get<double>());
 
   const auto refused = [&](const std::string& options, const std::string& prefix) {
     const auto [status, output] = test_support::run_command("track " + walk + ".c3d " + options +
@@ -195,16 +218,20 @@ TEST(CalibrateCommand, TrackWithAStaticTrialCalibratesOnItFirst) {
   };
   refused("--static " + static_trial + " --subject " + (dir / "subject.json").string(), "both");
   refused("--static " + static_trial + " --no-calibrate", "uncalibrated");
+  refused("--static-alone", "alone_without_static");
   refused("--static " + (dir / "missing.c3d").string(), "missing");
   // A recording that fails after the static trial was calibrated leaves no subject file either.
   const std::string empty = (dir / "empty.c3d").string();
   std::ofstream(empty).close();
-  const auto [failed, failed_output] = test_support::run_command(
-      "track " + empty + " --static " + static_trial + " --quiet --out " + (dir / "failed").string());
-  EXPECT_NE(failed, 0);
-  EXPECT_NE(failed_output.find("empty"), std::string::npos) << failed_output;
-  EXPECT_FALSE(fs::exists(dir / "failed_subject.json"));
-  EXPECT_FALSE(fs::exists(dir / "failed.json"));
+  for (const char* alone : {"", " --static-alone"}) {
+    const auto [failed, failed_output] =
+        test_support::run_command("track " + empty + " --static " + static_trial + alone + " --quiet --out " +
+                                  (dir / "failed").string());
+    EXPECT_NE(failed, 0);
+    EXPECT_NE(failed_output.find("empty"), std::string::npos) << failed_output;
+    EXPECT_FALSE(fs::exists(dir / "failed_subject.json")) << alone;
+    EXPECT_FALSE(fs::exists(dir / "failed.json")) << alone;
+  }
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "test_files.hpp"
@@ -89,10 +90,11 @@ TEST(StaticTrialCommand, AWrongStanceIsRefusedAndWritesNoSubject) {
   EXPECT_NE(output.find("--static-pose"), std::string::npos) << output;
   EXPECT_FALSE(fs::exists(subject));
   EXPECT_FALSE(fs::exists(dir / "wrong_report.json"));
-  // The same through s2kf track --static: nothing of the recording's is written.
+  // The same through s2kf track --static --static-alone: nothing of the recording's is written
+  // (calibrated together with the recording: TheStaticTrialAndTheRecordingAreCalibratedTogether).
   const auto [tracked, tracked_output] = test_support::run_command(
-      "track " + trial + " --static " + trial + " --static-pose zero --static-posture exact --out " +
-      (dir / "tracked").string());
+      "track " + trial + " --static " + trial +
+      " --static-alone --static-pose zero --static-posture exact --out " + (dir / "tracked").string());
   EXPECT_EQ(tracked, 1) << tracked_output;
   EXPECT_NE(tracked_output.find("is not a person's"), std::string::npos) << tracked_output;
   EXPECT_FALSE(fs::exists(dir / "tracked_subject.json"));
@@ -124,10 +126,11 @@ TEST(StaticTrialCommand, AStillStretchInsideTheRecordingIsItsStaticTrial) {
   EXPECT_EQ(messages("no_stretch", "--no-static-stretch").find("static trial"), std::string::npos);
 }
 
-// --static-refine calibrates the static trial and the recording together (one bundle adjustment):
-// the recording's summary says so, its calibration holds the frames of both, and a static trial
-// in a stance the calibration is told wrongly is refused as with --static alone, writing nothing.
-TEST(StaticTrialCommand, RefineCalibratesTheStaticTrialAndTheRecordingTogether) {
+// --static calibrates the static trial and the recording together (one bundle adjustment): the
+// recording's summary says so, its calibration holds the frames of both, and a static trial in a
+// stance the calibration is told wrongly is refused as with --static-alone, writing nothing. The
+// former --static-refine does the same and says what replaced it.
+TEST(StaticTrialCommand, TheStaticTrialAndTheRecordingAreCalibratedTogether) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = test_folder();
   const std::string trial = t_pose_trial(dir);
@@ -135,9 +138,8 @@ TEST(StaticTrialCommand, RefineCalibratesTheStaticTrialAndTheRecordingTogether) 
   const auto [simulated, simulate_output] =
       test_support::run_command("simulate --motion walk --seed 5 --frames 200 --out " + walk);
   ASSERT_EQ(simulated, 0) << simulate_output;
-  const auto [status, output] =
-      test_support::run_command("track " + walk + " --static " + trial +
-                                " --static-refine --formats csv --quiet --out " + (dir / "joint").string());
+  const auto [status, output] = test_support::run_command(
+      "track " + walk + " --static " + trial + " --formats csv --quiet --out " + (dir / "joint").string());
   ASSERT_EQ(status, 0) << output;
   const nlohmann::json summary = read_json(dir / "joint.json");
   std::string messages;
@@ -146,11 +148,25 @@ TEST(StaticTrialCommand, RefineCalibratesTheStaticTrialAndTheRecordingTogether) 
       << messages;
   // The static trial's 301 frames come first, then the walk's 200.
   EXPECT_EQ(summary["calibration"]["frames"].get<int>(), 501) << summary["calibration"].dump();
-  EXPECT_FALSE(fs::exists(dir / "joint_subject.json"));  // the subject is the recording's calibration
+  EXPECT_TRUE(fs::exists(dir / "joint_subject.json"));  // the recording's calibration, for --subject
 
-  const auto [wrong, wrong_output] = test_support::run_command(
-      "track " + walk + " --static " + trial + " --static-refine --static-pose zero --static-posture exact " +
-      "--out " + (dir / "joint_wrong").string());
+  const auto [deprecated, deprecated_output] =
+      test_support::run_command("track " + walk + " --static " + trial +
+                                " --static-refine --formats csv --quiet --out " + (dir / "refined").string());
+  ASSERT_EQ(deprecated, 0) << deprecated_output;
+  EXPECT_NE(deprecated_output.find("--static-refine is deprecated: calibrating the static trial and the "
+                                   "recording together is what --static does now"),
+            std::string::npos)
+      << deprecated_output;
+  const auto text = [](const fs::path& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(text(dir / "refined.csv"), text(dir / "joint.csv"));  // the same motion, to the digit
+
+  const auto [wrong, wrong_output] = test_support::run_command("track " + walk + " --static " + trial +
+                                                               " --static-pose zero --static-posture exact " +
+                                                               "--out " + (dir / "joint_wrong").string());
   EXPECT_EQ(wrong, 1) << wrong_output;
   EXPECT_NE(wrong_output.find("is not a person's"), std::string::npos) << wrong_output;
   EXPECT_FALSE(fs::exists(dir / "joint_wrong.csv"));

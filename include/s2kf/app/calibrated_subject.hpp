@@ -97,6 +97,11 @@ std::string static_posture_text(const CalibratedSubject& calibrated, const Subje
 /// the calibration's mean marker distance before and after.
 nlohmann::json subject_document(const CalibratedSubject& calibrated, const std::string& input);
 
+/// The same for `subject`, calibrated on the recordings `inputs` names ("static.c3d and walk.c3d")
+/// from a mean marker distance of `before_mm` to `after_mm`.
+nlohmann::json subject_document(const body::MarkerSet& subject, double before_mm, double after_mm,
+                                const std::string& inputs);
+
 /// Writes a subject file's document to `path`, completely or not at all.
 void write_subject_file(const std::string& path, const nlohmann::json& document);
 

@@ -50,9 +50,13 @@ struct TrackRequest {
   /// kPlacedMarkersStaticSdDeg and the pelvis upright within as much, where markers the set does not name
   /// were placed by their motion (a cluster's zero comes from the pose held alone), else near.
   std::string static_posture = "auto";
-  /// Calibrate the static trial and the recording together (one bundle adjustment from the marker
-  /// set: the static frames with the posture's prior, the recording's without), instead of tracking
-  /// with the static trial's subject.
+  /// With a static trial: calibrate the subject on the static trial alone and track with it as with
+  /// a subject file, instead of calibrating the static trial and the recording together (one
+  /// bundle adjustment from the marker set: the static frames with the posture's prior, the
+  /// recording's without), which the static trial does by default.
+  bool static_alone = false;
+  /// Deprecated: the joint calibration is what static_trial does now (its former option,
+  /// `--static-refine`, still needs static_trial and contradicts static_alone).
   bool static_refine = false;
   /// Without a static trial: a stretch of the recording in which the subject stands still in a
   /// reference pose is its static trial, and the recording's calibration starts from it.
@@ -85,6 +89,10 @@ std::string option_name(const TrackRequest& request, const std::string& dashed);
 /// How a recording refused as no whole body (choose_or_infer_marker_set) is tracked all the same,
 /// in the front end's words: the program's options or Python's keywords.
 std::string not_a_body_remedy(const TrackRequest& request);
+
+/// The warning a deprecated option of `request` gets, in the front end's words (what replaced
+/// it), or "" when it uses none.
+std::string deprecation_warning(const TrackRequest& request);
 
 /// Frames left out of the accuracy against the truth (the filter's start-up).
 inline constexpr long kTruthWarmupFrames = 20;
@@ -130,6 +138,14 @@ pipeline::SessionOptions session_options(const TrackRequest& request, double rat
 /// Throws UserError naming the recording.
 PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& recording,
                             const TrackRequest& request);
+
+/// The subject a static trial and the recording were calibrated together on (`--static` without
+/// `--static-alone`) as a subject file's document named `name`, for `s2kf track --subject` (its
+/// marker distance after calibrating: the run's); none when the recording was not calibrated with
+/// a static trial.
+std::optional<nlohmann::json> joint_subject_document(const PreparedTrack& prepared,
+                                                     const track::TrackingRun& run,
+                                                     const TrackRequest& request, const std::string& name);
 
 /// Runs the prepared session over every frame (rows to `hooks.sink` when set, else kept in the
 /// run's motion table); refuses a run that tracked nothing or only predicted. `bounded_memory`: a
