@@ -6,9 +6,13 @@ For each motion and seed it simulates the subject wearing the cluster model
 trial of the same subject, and tracks them (101 samples, calibrated, --truth):
 
   clusters           s2kf track REC
-  clusters_static    s2kf track REC --static STATIC [--static-options]
+  clusters_static    s2kf track REC --static STATIC --static-alone [--static-options]  (the subject
+                     calibrated on the static trial alone)
+  clusters_joint     s2kf track REC --static STATIC [--static-options]  (the static trial and the
+                     recording calibrated together, what --static does)
   anatomical         the same for the Plug-in Gait recording
   anatomical_static
+  anatomical_joint
 
 It prints a Markdown table: joint-angle RMS (deg, frames 20 on, offsets included) of the hips,
 knees and ankles from the written CSV against _truth.csv, the pelvis orientation RMS and the mean
@@ -18,6 +22,7 @@ segments not observed.
     scripts/cluster-model-table.py [--s2kf build/s2kf] [--motions walk,jumping_jacks,squats]
                                    [--seeds 1,2,3] [--frames 400] [--out DIR] [--raw FILE.json]
                                    [--configs clusters,clusters_static,anatomical,anatomical_static]
+                                   (or _joint for the static trial calibrated with the recording)
                                    [--static-options="--static-posture near"]
                                    [--simulate-options="--soft-tissue 0"] [--reuse]
 """
@@ -106,13 +111,14 @@ def main():
                 if not (args.reuse and os.path.exists(still + ".c3d")):
                     run("simulate", "--motion", "static", "--seed", seed, "--markerset", markerset, "--out",
                         still + ".c3d", *args.simulate_options.split())
-                for config in (kind, kind + "_static"):
+                for config in (kind, kind + "_static", kind + "_joint"):
                     if config not in configs:
                         continue
-                    prefix = base + ("_tracked_static" if config.endswith("_static") else "_tracked")
+                    suffix = config[len(kind):]  # "", "_static" or "_joint"
+                    prefix = base + "_tracked" + suffix
                     if not (args.reuse and os.path.exists(prefix + ".json")):
-                        extra = ["--static", still + ".c3d", *args.static_options.split()] if config.endswith(
-                            "_static") else []
+                        alone = ["--static-alone"] if suffix == "_static" else []
+                        extra = ["--static", still + ".c3d", *alone, *args.static_options.split()] if suffix else []
                         run("track", base + ".c3d", "--out", prefix, "--samples", "101", "--formats", "csv",
                             "--truth", base + "_truth.csv", *extra)
                     with open(prefix + ".json") as f:
@@ -135,7 +141,7 @@ def main():
         cells = []
         for name in ("hips", "knees", "ankles", "pelvis", "distance"):
             cells.append(" / ".join(f"{runs[c][name]:.2f}" if c in runs else "-" for c in configs))
-        c = "clusters_static" if "clusters_static" in runs else "clusters"
+        c = next((c for c in ("clusters_static", "clusters_joint") if c in runs), "clusters")
         p = runs.get(c, {})
         placed = f"{p.get('placed')}, {p.get('right')}, {p.get('left_out')} ({', '.join(p.get('wrong', []))})" if p else "-"
         unobserved = " / ".join(",".join(runs[c]["unobserved"]) or "-" for c in configs if c in runs)
