@@ -28,7 +28,7 @@ in degrees, root position RMS and mean marker distance in mm), one per occlusion
     scripts/static-trial-table.py [--s2kf build/s2kf] [--seeds 1,2,3] [--out DIR] [--raw FILE.json]
                                   [--occlusion none,paper] [--extra="--smooth"] [--configs default,track]
                                   [--stance zero|t-pose|a-pose] [--stance-sd DEG] [--static-options="..."]
-                                  [--lead-in]
+                                  [--lead-in] [--known-stance]
 """
 import argparse
 import json
@@ -53,6 +53,9 @@ parser.add_argument("--stance-sd", type=float, default=0.0, help="SD (deg) of ea
 parser.add_argument("--markerset", default="", help="the markers the simulated subject wears (plugin_gait, cmu)")
 parser.add_argument("--lead-in", action="store_true", help="every motion starts with the static trial")
 parser.add_argument("--static-options", default="", help="more options for --static (track, alone), space-separated")
+parser.add_argument("--known-stance", action="store_true",
+                    help="give track and alone the stance held as the reference pose (--static-pose with the "
+                         "static trial's _truth.csv): what a stance known exactly would give")
 args = parser.parse_args()
 CONFIGS = tuple(args.configs.split(","))
 PAPER_OCCLUSION = "0.005,100"
@@ -132,10 +135,13 @@ for seed in args.seeds.split(","):
                 simulated = base + "_motion.json"
                 write_lead_in(static_motion, motion, simulated)
             run("simulate", "--motion", simulated, "--seed", seed, *extra, *worn, "--out", base + ".c3d")
+            static_options = args.static_options.split()
+            if args.known_stance:
+                static_options += ["--static-pose", os.path.join(args.out, f"static_{seed}_truth.csv")]
             for config in CONFIGS:
                 option = {"default": [], "no-stretch": ["--no-static-stretch"], "static": ["--subject", subject], "both": ["--markerset", subject],
-                          "track": ["--static", static, *args.static_options.split()],
-                          "alone": ["--static", static, "--static-alone", *args.static_options.split()]}[config]
+                          "track": ["--static", static, *static_options],
+                          "alone": ["--static", static, "--static-alone", *static_options]}[config]
                 prefix = f"{base}_{config}"
                 run("track", base + ".c3d", "--truth", base + "_truth.csv", *option, *args.extra.split(),
                     "--formats", "csv", "--quiet", "--out", prefix)
