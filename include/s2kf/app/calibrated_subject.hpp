@@ -1,7 +1,7 @@
 /// @file
 /// A subject estimated from one recording, as `s2kf calibrate` estimates it and as `s2kf track
-/// --static` does before tracking: the session with its calibration, and the calibrated subject as
-/// the marker set a subject file holds.
+/// --static --static-alone` does before tracking: the session with its calibration, and the calibrated
+/// subject as the marker set a subject file holds.
 #pragma once
 
 #include <s2kf/app/marker_set_json.hpp>
@@ -20,7 +20,7 @@
 
 namespace s2kf::app {
 
-/// The options of `s2kf calibrate` (and of `s2kf track --static`, which calibrates in the zero pose).
+/// The options of `s2kf calibrate` (and of a static trial's calibration in `s2kf track --static`).
 struct SubjectSettings {
   std::string markerset;               ///< empty: the bundled set that matches best
   std::optional<body::MarkerSet> set;  ///< the marker set itself, chosen already (markerset is then unused)
@@ -72,8 +72,8 @@ CalibratedSubject calibrate_subject_file(const std::string& path, const std::str
                                          const SubjectSettings& settings, const SampleSet& samples,
                                          const std::string& name);
 
-/// The settings of a static trial's calibration in the model's zero pose, with every core (`s2kf
-/// track --static`, `s2kf.track(static=...)`).
+/// The settings of a static trial's calibration, with every core (`s2kf track --static`,
+/// `s2kf.track(static=...)`, alone or together with the recording).
 SubjectSettings static_trial_settings(const std::string& markerset, double height_mm,
                                       bool noise_from_calibration, double static_sd_deg,
                                       const std::string& static_pose_name = "",

@@ -134,7 +134,8 @@ track::TrackerOptions tracker_options(const TrackRequest& request, double rate_h
 pipeline::SessionOptions session_options(const TrackRequest& request, double rate_hz);
 
 /// Checks the recording against the request (frames, rate, smoothing memory, truth), chooses the
-/// marker set (calibrating on the static trial first when asked), and prepares the session.
+/// marker set (with a static trial: calibrated together with the recording, or on the static trial
+/// first with static_alone), and prepares the session.
 /// Throws UserError naming the recording.
 PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& recording,
                             const TrackRequest& request);
