@@ -50,7 +50,8 @@ const json* find_path(const json& summary, const std::vector<const char*>& keys)
   return at;
 }
 
-const std::vector<std::string> kStages{"read", "height", "calibration", "tracking", "smoothing", "writing"};
+const std::vector<std::string> kStages{"read",     "marker_set", "height", "calibration",
+                                       "tracking", "smoothing",  "writing"};
 
 /// The columns: a name and how the row of a summary gets its value.
 struct Column {

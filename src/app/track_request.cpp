@@ -15,6 +15,7 @@
 #include <s2kf/track/tracking_smoother.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <initializer_list>
 #include <optional>
@@ -205,12 +206,17 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   pipeline::SessionOptions options = session_options(request, source.rate_hz());
   prepared.samples = cached_sample_set(46, request.samples);
   // The set the request names, or the best bundled match completed (a file: inferred where none fits).
+  double marker_set_seconds = 0;  // the summary's marker_set stage
   const auto choose_set = [&] {
-    return recording.readable_file
-               ? choose_or_infer_marker_set(input, source.labels(), request.markerset, request.subject,
-                                            recording.inferred_markerset_path, request.force,
-                                            not_a_body_remedy(request))
-               : choose_marker_set_for(source.labels(), request.markerset, request.subject);
+    const auto start = std::chrono::steady_clock::now();
+    MarkerSetChoice choice =
+        recording.readable_file
+            ? choose_or_infer_marker_set(input, source.labels(), request.markerset, request.subject,
+                                         recording.inferred_markerset_path, request.force,
+                                         not_a_body_remedy(request))
+            : choose_marker_set_for(source.labels(), request.markerset, request.subject);
+    marker_set_seconds += track::seconds_since(start);
+    return choice;
   };
   if (!request.static_trial.empty() && !request.static_alone) {
     // The static trial and the recording calibrated together (one bundle adjustment from the
@@ -229,10 +235,12 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
     // The subject calibrated on the static trial (`s2kf calibrate --static`), with the markers the
     // set does not name placed by the recording's motion first (a static trial shows none), then
     // the recording tracked with it as with a subject file.
+    const auto start = std::chrono::steady_clock::now();
     const std::optional<MarkerSetChoice> completed =
         recording.readable_file
             ? completed_set_for_static_trial(request, input, recording.inferred_markerset_path)
             : std::nullopt;
+    marker_set_seconds += track::seconds_since(start);
     const CalibratedSubject calibrated = calibrate_static_trial(
         request, prepared.samples, std::filesystem::path(input).stem().string() + "_subject",
         completed ? &completed->set : nullptr);
@@ -270,6 +278,7 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   } catch (const std::invalid_argument& e) {
     throw UserError(input + ": " + e.what());
   }
+  session.times.marker_set = marker_set_seconds;
   if (prepared.truth && prepared.truth->joint_names != session.model.joint_names())
     throw UserError(
         truth_option + ": " + request.truth + " does not have the " +

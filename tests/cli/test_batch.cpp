@@ -177,6 +177,7 @@ TEST(Batch, SummarizeGivesOneRowPerRecordingWithTheValuesOfItsSummary) {
                                         "warnings",
                                         "warning_messages",
                                         "seconds_read",
+                                        "seconds_marker_set",
                                         "seconds_height",
                                         "seconds_calibration",
                                         "seconds_tracking",
@@ -219,7 +220,8 @@ TEST(Batch, SummarizeGivesOneRowPerRecordingWithTheValuesOfItsSummary) {
     EXPECT_EQ(row["smoothed"], "false");
     EXPECT_EQ(std::stoul(row["warnings"]), summary["warnings"].size());
     double total = 0;
-    for (const std::string stage : {"read", "height", "calibration", "tracking", "smoothing", "writing"}) {
+    for (const std::string stage :
+         {"read", "marker_set", "height", "calibration", "tracking", "smoothing", "writing"}) {
       EXPECT_EQ(std::stod(row["seconds_" + stage]), summary["seconds_per_stage"][stage].get<double>())
           << stage;
       total += summary["seconds_per_stage"][stage].get<double>();
@@ -363,7 +365,8 @@ TEST(Batch, SecondsPerStageAreInTheSummaryAndPrintedWithVerbose) {
   double sum = 0;
   std::ostringstream printed;
   printed << "Seconds per stage:";
-  for (const std::string stage : {"read", "height", "calibration", "tracking", "smoothing", "writing"}) {
+  for (const std::string stage :
+       {"read", "marker_set", "height", "calibration", "tracking", "smoothing", "writing"}) {
     ASSERT_TRUE(times.contains(stage)) << stage;
     const double seconds = times[stage].get<double>();
     EXPECT_GE(seconds, 0) << stage;
@@ -372,10 +375,10 @@ TEST(Batch, SecondsPerStageAreInTheSummaryAndPrintedWithVerbose) {
     std::snprintf(text, sizeof text, " %s %.3f%s", stage.c_str(), seconds, stage == "writing" ? "" : ",");
     printed << text;
   }
-  EXPECT_EQ(times.size(), 6u);
+  EXPECT_EQ(times.size(), 7u);
   EXPECT_NE(result.output.find(printed.str()), std::string::npos) << printed.str() << "\n" << result.output;
   EXPECT_EQ(times["smoothing"].get<double>(), 0);  // not smoothed
-  for (const std::string stage : {"read", "height", "calibration", "tracking", "writing"})
+  for (const std::string stage : {"read", "marker_set", "height", "calibration", "tracking", "writing"})
     EXPECT_GT(times[stage].get<double>(), 0) << stage;  // each was done
   EXPECT_LT(sum, wall);  // stages do not overlap and all happen inside the process
   // Tracking is the sum of the per-frame times: at least half the frames take the median or more.

@@ -4,6 +4,7 @@
 // Thresholds: measured on the bundled recordings (docs/tracking.md gives the numbers), with about
 // 30 % margin for a change of seed or sample set; a wrong formula (a sign, an axis order, a missing
 // re-centring) moves these errors by far more.
+#include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/body/marker_mapping.hpp>
 #include <s2kf/calibration/height_estimate.hpp>
 #include <s2kf/evaluation/truth_metrics.hpp>
@@ -40,6 +41,7 @@
 #include <iomanip>
 #include <map>
 #include <random>
+#include <tuple>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -469,6 +471,21 @@ TEST(PartialMarkerSets, ProgramMarksTheUnobservedBodyInEveryOutput) {
   // plugin_gait_lower names 15 of its markers; the head, shoulder, elbow and wrist markers are placed
   // by their motion (docs/marker-sets.md), which leaves only the left hand without a marker.
   EXPECT_EQ(summary["marker_set"], "plugin_gait_lower+inferred");
+  // Where the template fit and the rounds put them (1000 mm model): the coarse-to-fine template
+  // search and its de-duplicated points give the set of the whole 3,060-placement grid (a template
+  // centroid counting each place once moved these by up to 50 mm).
+  const body::MarkerSet completed = app::load_marker_set(prefix + "_markerset.json");
+  const std::vector<std::tuple<std::string, std::string, Eigen::Vector3d>> placed{
+      {"Top.Head", "BUN", {2.64, 18.92, 152.59}},  {"Front.Head", "BUN", {-2.38, 76.53, 113.14}},
+      {"R.Shoulder", "BT", {105.87, -11.02, 208.03}}, {"R.Wrist", "RW", {7.98, -19.93, -33.38}},
+      {"L.Elbow", "LS", {-55.39, -22.45, -153.16}},  {"L.Wrist", "LE", {-3.71, 19.89, -155.31}}};
+  for (const auto& [label, frame, offset] : placed) {
+    const auto entry = std::find_if(completed.entries.begin(), completed.entries.end(),
+                                    [&](const body::MarkerSetEntry& e) { return e.label == label; });
+    ASSERT_NE(entry, completed.entries.end()) << label;
+    EXPECT_EQ(entry->frame, frame) << label;
+    EXPECT_LT((entry->offset - offset).norm(), 0.1) << label << ": " << entry->offset.transpose();
+  }
   EXPECT_EQ(summary["unobserved"]["segments"], (std::vector<std::string>{"LW"}));
   EXPECT_EQ(summary["segments"].size(), 17u);
   const io::MotionTable motion = io::load_motion_csv(prefix + ".csv");

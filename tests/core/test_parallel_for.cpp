@@ -40,4 +40,16 @@ TEST(ParallelFor, TheLowestFailingPieceIsRethrownWhateverTheThreads) {
   }
 }
 
+TEST(ParallelFor, NoPieceStartsAfterAFailure) {
+  // One thread takes the pieces in order: the failing piece is the last one run.
+  std::vector<int> runs(10, 0);
+  EXPECT_THROW(s2kf::parallel_for(10, 1,
+                                  [&](int i) {
+                                    ++runs[static_cast<std::size_t>(i)];
+                                    if (i == 4) throw std::runtime_error("piece 4");
+                                  }),
+               std::runtime_error);
+  EXPECT_EQ(runs, (std::vector<int>{1, 1, 1, 1, 1, 0, 0, 0, 0, 0}));
+}
+
 }  // namespace

@@ -54,21 +54,22 @@ TEST(StageTimes, ATimedSourceForwardsEveryFrameAndCountsTheTimeOfItsReads) {
 }
 
 TEST(StageTimes, AddUpStageByStage) {
-  const track::StageTimes a{1, 2, 3, 4, 5, 6};
-  const track::StageTimes b{0.5, 0.25, 0, 2, 0, 1};
+  const track::StageTimes a{1, 0.5, 2, 3, 4, 5, 6};
+  const track::StageTimes b{0.5, 0.125, 0.25, 0, 2, 0, 1};
   const track::StageTimes sum = a + b;
   EXPECT_EQ(sum.read, 1.5);
+  EXPECT_EQ(sum.marker_set, 0.625);
   EXPECT_EQ(sum.height, 2.25);
   EXPECT_EQ(sum.calibration, 3);
   EXPECT_EQ(sum.tracking, 6);
   EXPECT_EQ(sum.smoothing, 5);
   EXPECT_EQ(sum.writing, 7);
-  EXPECT_EQ(sum.sum(), 21 + 3.75);
+  EXPECT_EQ(sum.sum(), 21 + 3.75 + 0.625);
   const auto list = track::stage_list(sum);
-  ASSERT_EQ(list.size(), 6u);
-  const char* names[] = {"read", "height", "calibration", "tracking", "smoothing", "writing"};
-  const double values[] = {1.5, 2.25, 3, 6, 5, 7};
-  for (std::size_t i = 0; i < 6; ++i) {
+  ASSERT_EQ(list.size(), 7u);
+  const char* names[] = {"read", "marker_set", "height", "calibration", "tracking", "smoothing", "writing"};
+  const double values[] = {1.5, 0.625, 2.25, 3, 6, 5, 7};
+  for (std::size_t i = 0; i < 7; ++i) {
     EXPECT_EQ(list[i].first, names[i]);
     EXPECT_EQ(list[i].second, values[i]);
   }

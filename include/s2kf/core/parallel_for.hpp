@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <exception>
 #include <thread>
 #include <vector>
@@ -18,19 +19,26 @@ template <class Work>
 void parallel_for(int count, int threads, const Work& work) {
   threads = std::clamp(threads, 1, std::max(count, 1));
   std::vector<std::exception_ptr> failure(static_cast<std::size_t>(std::max(count, 0)));
-  const auto run = [&](int t) {
-    for (int i = t; i < count; i += threads) {
+  // Each thread takes the next piece not taken yet, so a thread the machine slows (or a piece
+  // that takes longer) does not hold the others back. After a failure no piece is started; every
+  // piece below it was started before it, so the lowest failing piece is always among those run.
+  std::atomic<int> next{0};
+  std::atomic<bool> failed{false};
+  const auto run = [&] {
+    while (!failed.load(std::memory_order_relaxed)) {
+      const int i = next.fetch_add(1, std::memory_order_relaxed);
+      if (i >= count) return;
       try {
         work(i);
       } catch (...) {
         failure[static_cast<std::size_t>(i)] = std::current_exception();
-        return;
+        failed = true;
       }
     }
   };
   std::vector<std::thread> workers;
-  for (int t = 1; t < threads; ++t) workers.emplace_back(run, t);
-  run(0);
+  for (int t = 1; t < threads; ++t) workers.emplace_back(run);
+  run();
   for (std::thread& worker : workers) worker.join();
   for (const std::exception_ptr& e : failure)
     if (e) std::rethrow_exception(e);

@@ -56,7 +56,7 @@ S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recordi
     c.candidates = detail::template_points(c.base, options.known_sets);
     // The known set's own markers are places on the body too.
     for (const body::Marker& marker : body::apply_marker_set(c.base, known).markers)
-      c.candidates.push_back({marker.frame, marker.offset});
+      detail::add_template_point(c.candidates, marker);
     shortlist = detail::shortlist_template_fits(c, true);
     excluded_note = detail::leave_out_far_points(c, shortlist, known_points, &far);
   } catch (const std::invalid_argument& e) {

@@ -18,15 +18,39 @@ namespace detail {
 struct TemplatePoint {
   int frame = 0;
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< in its frame
+  int copies = 1;  ///< how many markers of the base model and the sets are here
 };
+
+/// Appends the place of `marker`, or counts it once more where `points` holds it already (most
+/// sets name their markers like the base model's): the same nearest points, found among half as
+/// many, and the same centroid.
+inline void add_template_point(std::vector<TemplatePoint>& points, const body::Marker& marker) {
+  for (TemplatePoint& point : points)
+    if (point.frame == marker.frame && point.offset == marker.offset) {
+      ++point.copies;
+      return;
+    }
+  points.push_back({marker.frame, marker.offset});
+}
+
+/// Per template point, its share of the markers it stands for: placed points times these give
+/// the centroid of every marker of the base model and the sets.
+inline Eigen::VectorXd centroid_weights(const std::vector<TemplatePoint>& points) {
+  Eigen::VectorXd weights(static_cast<Eigen::Index>(points.size()));
+  double total = 0;
+  for (const TemplatePoint& point : points) total += point.copies;
+  for (std::size_t k = 0; k < points.size(); ++k)
+    weights(static_cast<Eigen::Index>(k)) = points[k].copies / total;
+  return weights;
+}
 
 inline std::vector<TemplatePoint> template_points(const body::BodyModel& base,
                                                   const std::vector<body::MarkerSet>& sets) {
   std::vector<TemplatePoint> points;
-  for (const body::Marker& marker : base.markers) points.push_back({marker.frame, marker.offset});
+  for (const body::Marker& marker : base.markers) add_template_point(points, marker);
   for (const body::MarkerSet& set : sets)
     for (const body::Marker& marker : body::apply_marker_set(base, set).markers)
-      points.push_back({marker.frame, marker.offset});
+      add_template_point(points, marker);
   return points;
 }
 
@@ -91,10 +115,12 @@ inline constexpr double kTemplateCap = 150.0;
 /// The matching steps: in each, every marker's nearest placed template point (`nearest(marker)`,
 /// the marker relative to fit.translation: its index and squared distance; index -1 where none is
 /// within the cap), the capped cost, and the translation moved by the mean residual of the markers
-/// within the cap. Sets cost, translation, nearest and residual_mm (of the last step).
+/// within the cap. Sets cost, translation, nearest and residual_mm (of the last step). A last step
+/// whose cost reaches `bound` stops there (cost at least `bound`, nearest and residual_mm partial):
+/// the caller keeps only fits below it, and the cost's terms are never negative.
 template <class Placed, class Nearest>
 void match_steps(const Placed& placed, const Eigen::Matrix3Xd& lab, int steps, const Nearest& nearest,
-                 TemplateFit& fit) {
+                 TemplateFit& fit, double bound = std::numeric_limits<double>::infinity()) {
   fit.nearest.assign(static_cast<std::size_t>(lab.cols()), -1);
   fit.residual_mm.assign(static_cast<std::size_t>(lab.cols()), std::numeric_limits<double>::infinity());
   for (int step = 0; step < steps; ++step) {
@@ -106,6 +132,10 @@ void match_steps(const Placed& placed, const Eigen::Matrix3Xd& lab, int steps, c
       fit.nearest[static_cast<std::size_t>(i)] = static_cast<int>(hit.index);
       fit.residual_mm[static_cast<std::size_t>(i)] = std::sqrt(hit.squared_distance);
       cost += std::min(hit.squared_distance, kTemplateCap * kTemplateCap);
+      if (step + 1 == steps && cost >= bound) {
+        fit.cost = cost;
+        return;
+      }
       if (hit.squared_distance < kTemplateCap * kTemplateCap)
         shift += lab.col(i) - (placed.col(hit.index) + fit.translation), ++inliers;
     }
@@ -116,9 +146,11 @@ void match_steps(const Placed& placed, const Eigen::Matrix3Xd& lab, int steps, c
 
 /// The cost of `fit` (its height, heading, joints) with the translation refined by `steps`
 /// nearest-point matching steps from fit.translation, each marker compared with every template
-/// point; sets cost, translation, nearest, residual_mm.
+/// point; sets cost, translation, nearest, residual_mm (partial where the cost reaches `bound`:
+/// match_steps).
 inline void match_template(const body::BodyModel& base, const std::vector<TemplatePoint>& candidates,
-                           const Eigen::Matrix3Xd& lab, int up, int steps, TemplateFit& fit) {
+                           const Eigen::Matrix3Xd& lab, int up, int steps, TemplateFit& fit,
+                           double bound = std::numeric_limits<double>::infinity()) {
   // One row per coordinate, so that the distances to every template point are computed a vector
   // of points at a time.
   const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> placed =
@@ -133,7 +165,7 @@ inline void match_template(const body::BodyModel& base, const std::vector<Templa
     hit.squared_distance = squared_distance.minCoeff(&hit.index);
     return hit;
   };
-  match_steps(placed, lab, steps, scan, fit);
+  match_steps(placed, lab, steps, scan, fit, bound);
 }
 
 /// Lets the pose vary where the markers ask for it: pattern search over the hips, knees,
@@ -156,7 +188,7 @@ inline void refine_pose(const body::BodyModel& base, const std::vector<TemplateP
           const body::Joint& joint = base.joints[static_cast<std::size_t>(j)];
           trial.joints(j) = std::clamp(fit.joints(j) + sign * step, joint.lower, joint.upper);
           if (trial.joints(j) == fit.joints(j)) continue;
-          match_template(base, candidates, lab, up, 2, trial);
+          match_template(base, candidates, lab, up, 2, trial, fit.cost);
           if (trial.cost < fit.cost) fit = std::move(trial), improved = true;
         }
     }
@@ -165,7 +197,8 @@ inline void refine_pose(const body::BodyModel& base, const std::vector<TemplateP
 
 /// Fits the model, scaled to 1300-2100 mm and turned about the vertical `up` in 10 deg steps, at
 /// its zero pose with the arms turned out 0-90 deg, to the marker positions `lab` by nearest
-/// points, the translation refined by four matching steps; where the best of these leaves an RMS
+/// points, the translation refined by four matching steps (heights 100 mm apart first, then each
+/// direction's two best placements 50 mm taller and shorter); where the best of these leaves an RMS
 /// residual above `refine_above_rms_mm`, lets the pose vary (refine_pose) for the best direction
 /// and its best rivals; compares the best direction with the best more than 60 deg away. Where the
 /// near-zero pose fits, it is kept: refining it only trades a marker at a joint between the two
@@ -173,39 +206,71 @@ inline void refine_pose(const body::BodyModel& base, const std::vector<TemplateP
 inline TemplateFit fit_template(const body::BodyModel& base, const std::vector<TemplatePoint>& candidates,
                                 const Eigen::Matrix3Xd& lab, int up, double refine_above_rms_mm) {
   constexpr int kHeadings = 36;
+  constexpr double kLowest = 1300, kTallest = 2100, kCoarseStep = 100;
+  const std::vector<double> abductions{0.0, 0.4, 0.8, 1.2, 1.57};
   std::vector<TemplateFit> best_by_heading(kHeadings);
   std::vector<Eigen::Vector3d> start_by_heading(kHeadings, Eigen::Vector3d::Zero());
-  for (const double abduction : {0.0, 0.4, 0.8, 1.2, 1.57}) {
-    const Eigen::VectorXd joints = arms_out(base, abduction);
-    // A trial placement turns and scales these; the nearest point to a marker is found by taking
-    // the marker back into the model's frame instead, in a tree built once per pose.
-    const Eigen::Matrix3Xd model_points = template_in_pose(base, candidates, joints);
-    const geometry::NearestPointTree tree(model_points);
-    for (double height = 1300; height <= 2100; height += 50)
-      for (int h = 0; h < kHeadings; ++h) {
-        TemplateFit fit;
-        fit.height = height, fit.heading = 2 * kPi * h / kHeadings;
-        const Eigen::Matrix3d rotation = lab_from_model(up, fit.heading);
-        const Eigen::Matrix3Xd placed = rotation * model_points * (height / 1000.0);
-        // Start at the markers' centroid, feet on the lowest marker; the matching steps shift it.
-        fit.translation = lab.rowwise().mean() - placed.rowwise().mean();
-        fit.translation(up) = lab.row(up).minCoeff() - placed.row(up).minCoeff();
-        const Eigen::Vector3d start = fit.translation;
-        const double scale = height / 1000.0, cap_in_model = kTemplateCap / scale;
-        const auto search = [&](const Eigen::Vector3d& marker) {
-          geometry::NearestPointTree::Hit hit =
-              tree.nearest(rotation.transpose() * marker / scale, cap_in_model * cap_in_model);
-          if (hit.index >= 0) hit.squared_distance = (placed.col(hit.index) - marker).squaredNorm();
-          return hit;
-        };
-        match_steps(placed, lab, 4, search, fit);
-        if (fit.cost < best_by_heading[static_cast<std::size_t>(h)].cost) {
-          fit.joints = joints;
-          best_by_heading[static_cast<std::size_t>(h)] = std::move(fit);
-          start_by_heading[static_cast<std::size_t>(h)] = start;
-        }
-      }
+  const Eigen::VectorXd weights = centroid_weights(candidates);
+  // A trial placement turns and scales a pose's points; the nearest point to a marker is found by
+  // taking the marker back into the model's frame instead, in a tree built once per pose.
+  std::vector<Eigen::VectorXd> poses;
+  std::vector<Eigen::Matrix3Xd> model_points;
+  std::vector<geometry::NearestPointTree> trees;
+  for (const double abduction : abductions) {
+    poses.push_back(arms_out(base, abduction));
+    model_points.push_back(template_in_pose(base, candidates, poses.back()));
+    trees.emplace_back(model_points.back());
   }
+  // The cost of one placement, the best of each direction kept. A placement that can matter
+  // neither as the direction's best nor below `wanted` stops early (match_steps): its cost is then
+  // at least both.
+  const auto place = [&](std::size_t pose, double height, int h, double wanted) {
+    const auto hh = static_cast<std::size_t>(h);
+    TemplateFit fit;
+    fit.height = height, fit.heading = 2 * kPi * h / kHeadings;
+    const Eigen::Matrix3d rotation = lab_from_model(up, fit.heading);
+    const Eigen::Matrix3Xd placed = rotation * model_points[pose] * (height / 1000.0);
+    // Start at the markers' centroid, feet on the lowest marker; the matching steps shift it.
+    fit.translation = lab.rowwise().mean() - placed * weights;
+    fit.translation(up) = lab.row(up).minCoeff() - placed.row(up).minCoeff();
+    const Eigen::Vector3d start = fit.translation;
+    const double scale = height / 1000.0, cap_in_model = kTemplateCap / scale;
+    const auto search = [&](const Eigen::Vector3d& marker) {
+      geometry::NearestPointTree::Hit hit =
+          trees[pose].nearest(rotation.transpose() * marker / scale, cap_in_model * cap_in_model);
+      if (hit.index >= 0) hit.squared_distance = (placed.col(hit.index) - marker).squaredNorm();
+      return hit;
+    };
+    match_steps(placed, lab, 4, search, fit, std::max(wanted, best_by_heading[hh].cost));
+    const double cost = fit.cost;
+    if (cost < best_by_heading[hh].cost) {
+      fit.joints = poses[pose];
+      best_by_heading[hh] = std::move(fit);
+      start_by_heading[hh] = start;
+    }
+    return cost;
+  };
+  // Coarse: each direction's two best (pose, height) placements, the second's cost the bound.
+  struct Coarse {
+    double cost = std::numeric_limits<double>::infinity();
+    std::size_t pose = 0;
+    double height = 0;
+  };
+  std::vector<std::array<Coarse, 2>> coarse(kHeadings);
+  for (std::size_t pose = 0; pose < poses.size(); ++pose)
+    for (double height = kLowest; height <= kTallest; height += kCoarseStep)
+      for (int h = 0; h < kHeadings; ++h) {
+        std::array<Coarse, 2>& two = coarse[static_cast<std::size_t>(h)];
+        const double cost = place(pose, height, h, two[1].cost);
+        if (cost < two[1].cost) two[1] = {cost, pose, height};
+        if (two[1].cost < two[0].cost) std::swap(two[0], two[1]);
+      }
+  // Fine: halfway to the next coarse heights around each.
+  for (int h = 0; h < kHeadings; ++h)
+    for (const Coarse& around : coarse[static_cast<std::size_t>(h)])
+      for (const double height : {around.height - kCoarseStep / 2, around.height + kCoarseStep / 2})
+        if (std::isfinite(around.cost) && height >= kLowest && height <= kTallest)
+          place(around.pose, height, h, 0.0);  // only the direction's best matters now
   // Each direction's best placement again, by comparing every marker with every point: the
   // nearest point of the markers beyond the cap, too.
   for (int h = 0; h < kHeadings; ++h) {

@@ -1,7 +1,7 @@
 /// @file
 /// Where the time of tracking a recording goes: wall-clock seconds per stage of the pipeline (read,
-/// height, calibration, tracking, smoothing, writing). prepare_session and run_session measure what
-/// they do; the caller adds what happens outside them (opening the file, finishing the outputs).
+/// marker set, height, calibration, tracking, smoothing, writing). prepare_session and run_session measure
+/// what they do; the caller adds what happens outside them (opening the file, finishing the outputs).
 #pragma once
 
 #include <s2kf/io/frame_source.hpp>
@@ -16,16 +16,18 @@ namespace s2kf::track {
 
 struct StageTimes {
   double read = 0;         ///< opening the recording and reading its frames (for every stage)
+  double marker_set = 0;   ///< choosing the marker set, completing or inferring it from the motion
   double height = 0;       ///< estimating the subject's height, its reads excluded
   double calibration = 0;  ///< calibrating the subject, its reads excluded
   double tracking = 0;     ///< the filter (or the baseline) on every frame
   double smoothing = 0;    ///< recording the posteriors and the backward pass (--smooth)
   double writing = 0;      ///< the output files
 
-  double sum() const { return read + height + calibration + tracking + smoothing + writing; }
+  double sum() const { return read + marker_set + height + calibration + tracking + smoothing + writing; }
 
   StageTimes& operator+=(const StageTimes& other) {
     read += other.read;
+    marker_set += other.marker_set;
     height += other.height;
     calibration += other.calibration;
     tracking += other.tracking;
@@ -39,8 +41,10 @@ inline StageTimes operator+(StageTimes a, const StageTimes& b) { return a += b; 
 
 /// The stages' names and their seconds, in pipeline order.
 inline std::vector<std::pair<std::string, double>> stage_list(const StageTimes& times) {
-  return {{"read", times.read},         {"height", times.height},       {"calibration", times.calibration},
-          {"tracking", times.tracking}, {"smoothing", times.smoothing}, {"writing", times.writing}};
+  return {{"read", times.read},         {"marker_set", times.marker_set},
+          {"height", times.height},     {"calibration", times.calibration},
+          {"tracking", times.tracking}, {"smoothing", times.smoothing},
+          {"writing", times.writing}};
 }
 
 /// Seconds from `start` to now on the steady clock.
