@@ -41,10 +41,10 @@
 #include <iomanip>
 #include <map>
 #include <random>
-#include <tuple>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 #include "address_sanitizer.hpp"
 
@@ -476,9 +476,9 @@ TEST(PartialMarkerSets, ProgramMarksTheUnobservedBodyInEveryOutput) {
   // centroid counting each place once moved these by up to 50 mm).
   const body::MarkerSet completed = app::load_marker_set(prefix + "_markerset.json");
   const std::vector<std::tuple<std::string, std::string, Eigen::Vector3d>> placed{
-      {"Top.Head", "BUN", {2.64, 18.92, 152.59}},  {"Front.Head", "BUN", {-2.38, 76.53, 113.14}},
+      {"Top.Head", "BUN", {2.64, 18.92, 152.59}},     {"Front.Head", "BUN", {-2.38, 76.53, 113.14}},
       {"R.Shoulder", "BT", {105.87, -11.02, 208.03}}, {"R.Wrist", "RW", {7.98, -19.93, -33.38}},
-      {"L.Elbow", "LS", {-55.39, -22.45, -153.16}},  {"L.Wrist", "LE", {-3.71, 19.89, -155.31}}};
+      {"L.Elbow", "LS", {-55.39, -22.45, -153.16}},   {"L.Wrist", "LE", {-3.71, 19.89, -155.31}}};
   for (const auto& [label, frame, offset] : placed) {
     const auto entry = std::find_if(completed.entries.begin(), completed.entries.end(),
                                     [&](const body::MarkerSetEntry& e) { return e.label == label; });
