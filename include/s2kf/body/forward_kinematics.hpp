@@ -89,6 +89,9 @@ struct BasicForwardKinematicsWorkspace {
   std::vector<Scalar> markers;   ///< 3 arrays per requested marker: x, y, z
   /// Frames reached by a zero translation share their parent's origin instead of copying it.
   std::vector<int> origin_frame;
+  /// Per frame and column c, the frame whose rotation arrays hold column c: a joint turns two
+  /// columns of its parent's rotation, and shares the third (its axis) instead of copying it.
+  std::vector<int> column_frame;
   /// 0, 1, ..., M - 1: the marker list of a call that wants every marker.
   std::vector<int> all_markers;
 
@@ -108,9 +111,13 @@ struct BasicForwardKinematicsWorkspace {
     size(markers, 3 * marker_count);
     origin_frame.resize(model.frame_count());
     origin_frame[0] = 0;
+    column_frame.assign(3 * static_cast<std::size_t>(model.frame_count()), 0);
     for (int j = 0; j < model.joint_count(); ++j) {
       const Joint& joint = model.joints[j];
       origin_frame[j + 1] = joint.translation.isZero(0) ? origin_frame[joint.parent_frame] : j + 1;
+      for (int c = 0; c < 3; ++c)
+        column_frame[3 * (j + 1) + c] =
+            c == static_cast<int>(joint.axis) ? column_frame[3 * joint.parent_frame + c] : j + 1;
     }
     all_markers.resize(model.marker_count());
     for (int m = 0; m < model.marker_count(); ++m) all_markers[m] = m;
@@ -137,7 +144,9 @@ S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
                                                  const std::vector<int>& marker_indices,
                                                  BasicForwardKinematicsWorkspace<Scalar>& ws,
                                                  Eigen::Index n) {
-  auto rotation = [&](int frame, int r, int c) { return ws.array(ws.rotation, 9 * frame + 3 * c + r); };
+  auto rotation = [&](int frame, int r, int c) {
+    return ws.array(ws.rotation, 9 * ws.column_frame[3 * frame + c] + 3 * c + r);
+  };
   auto origin = [&](int frame, int r) { return ws.array(ws.origin, 3 * ws.origin_frame[frame] + r); };
   // out = base + R(frame) t (row r), skipping the zero components of t (most joints translate, and
   // most markers sit, along one or two axes); one pass, no copy of `base` first.
@@ -181,16 +190,16 @@ S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
     const int p = joint.parent_frame, f = j + 1;
     if (ws.origin_frame[f] == f)  // o_f = o_p + R_p t
       for (int r = 0; r < 3; ++r) offset(origin(f, r), origin(p, r), p, r, joint.translation);
-    // R_f = R_p * R_axis(q): the axis column is copied, the other two turn by q in their plane.
+    // R_f = R_p * R_axis(q): the axis column is the parent's (shared: column_frame), the other
+    // two turn by q in their plane.
     const int a = static_cast<int>(joint.axis);
     const int u = (a + 1) % 3, v = (a + 2) % 3;  // (y, z) for x, (z, x) for y, (x, y) for z
     const Scalar* __restrict s = ws.array(ws.sin_q, j);
     const Scalar* __restrict c = ws.array(ws.cos_q, j);
     for (int r = 0; r < 3; ++r) {
-      const Scalar* __restrict pa = rotation(p, r, a), * __restrict pu = rotation(p, r, u), * __restrict pv = rotation(p, r, v);
-      Scalar* __restrict fa = rotation(f, r, a), * __restrict fu = rotation(f, r, u), * __restrict fv = rotation(f, r, v);
+      const Scalar* __restrict pu = rotation(p, r, u), * __restrict pv = rotation(p, r, v);
+      Scalar* __restrict fu = rotation(f, r, u), * __restrict fv = rotation(f, r, v);
       for (Eigen::Index i = 0; i < n; ++i) {
-        fa[i] = pa[i];
         fu[i] = c[i] * pu[i] + s[i] * pv[i];
         fv[i] = c[i] * pv[i] - s[i] * pu[i];
       }
