@@ -13,8 +13,9 @@
 namespace s2kf {
 
 /// Calls work(i) for i = 0 .. count - 1 on up to `threads` threads (the calling one included;
-/// thread t takes i = t, t + threads, ...). An exception thrown by work(i) stops that thread's
-/// pieces; once all threads are done, the one of the lowest i is rethrown, whatever the threads.
+/// each takes the next i not yet taken). An exception thrown by work(i) stops the starting of
+/// further pieces; once all threads are done, the one of the lowest i is rethrown, whatever the
+/// threads.
 template <class Work>
 void parallel_for(int count, int threads, const Work& work) {
   threads = std::clamp(threads, 1, std::max(count, 1));

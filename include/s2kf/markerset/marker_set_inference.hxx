@@ -22,8 +22,8 @@ struct TemplatePoint {
 };
 
 /// Appends the place of `marker`, or counts it once more where `points` holds it already (most
-/// sets name their markers like the base model's): the same nearest points, found among half as
-/// many, and the same centroid.
+/// sets name their markers like the base model's): the same nearest points, found among fewer;
+/// the counts keep the centroid that of every marker (centroid_weights).
 inline void add_template_point(std::vector<TemplatePoint>& points, const body::Marker& marker) {
   for (TemplatePoint& point : points)
     if (point.frame == marker.frame && point.offset == marker.offset) {
