@@ -311,6 +311,14 @@ sim::KeyframeMotion standing_still(int joint_count) {
   return still;
 }
 
+// The static trial of `still` on `subject`: 300 frames (3 s at 100 Hz).
+sim::Recording static_recording(const sim::KeyframeMotion& still, const sim::Subject& subject,
+                                unsigned seed) {
+  sim::RecordingOptions options;
+  options.frames = 300;
+  return sim::simulate_recording(still, subject, options, seed);
+}
+
 // A static trial in the model's zero pose fixes the gauges, the markers' placement about the joints
 // that no recording tells from a constant offset of the joint angles (a foot's markers turned about
 // its ankle, a hand's about the wrist): with the posture's prior (static_pose_sd_rad) the offsets
@@ -322,9 +330,7 @@ TEST(SubjectCalibration, AStaticTrialFixesTheGauges) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const sim::Subject subject = placement_only_subject(7);
   const sim::KeyframeMotion still = standing_still(subject.model.joint_count());
-  sim::RecordingOptions recording_options;
-  recording_options.frames = 300;
-  const sim::Recording recording = sim::simulate_recording(still, subject, recording_options, 7);
+  const sim::Recording recording = static_recording(still, subject, 7);
   const body::BodyModel model = body::mmm_body_model(1750);
   const body::MarkerMapping mapping = body::map_markers(recording.labels, model.marker_names());
   calibration::CalibrationOptions options;
@@ -363,9 +369,7 @@ TEST(SubjectCalibration, TheUprightPriorKeepsALeaningMarkerSetOffTheStaticTrial)
   S2KF_SKIP_UNDER_SANITIZERS();
   const sim::Subject subject = placement_only_subject(3);
   const sim::KeyframeMotion still = standing_still(subject.model.joint_count());
-  sim::RecordingOptions recording_options;
-  recording_options.frames = 300;
-  const sim::Recording recording = sim::simulate_recording(still, subject, recording_options, 3);
+  const sim::Recording recording = static_recording(still, subject, 3);
   body::BodyModel leaning = subject.model;
   const body::FrameTransforms zero =
       body::joint_frames(leaning, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(),
@@ -431,9 +435,7 @@ TEST(SubjectCalibration, AStaticTrialOffTheReferencePoseIsEstimated) {
     const body::Joint& joint = subject.model.joints[static_cast<std::size_t>(j)];
     still.joints.row(j).setConstant(std::clamp(off(draw), joint.lower + 0.01, joint.upper - 0.01));
   }
-  sim::RecordingOptions recording_options;
-  recording_options.frames = 300;
-  const sim::Recording recording = sim::simulate_recording(still, subject, recording_options, 11);
+  const sim::Recording recording = static_recording(still, subject, 11);
   const body::BodyModel model = body::mmm_body_model(1750);
   const body::MarkerMapping mapping = body::map_markers(recording.labels, model.marker_names());
   const Eigen::VectorXd held = still.joints.col(0);
@@ -489,9 +491,7 @@ TEST(SubjectCalibration, AMovingTrialBesideTheStaticOneSplitsTheArmsRoll) {
   sim::KeyframeMotion still = standing_still(subject.model.joint_count());
   still.joints.row(shoulder_roll).setConstant(held_rad);
   still.joints.row(forearm_roll).setConstant(-held_rad);
-  sim::RecordingOptions recording_options;
-  recording_options.frames = 300;
-  const sim::Recording static_trial = sim::simulate_recording(still, subject, recording_options, 5);
+  const sim::Recording static_trial = static_recording(still, subject, 5);
   const sim::Recording moving = test_support::sweep_recording(subject, 5, 400, 5.0);
   MarkerSequence both = static_trial;  // the static trial first, then the moving trial
   both.positions.conservativeResize(Eigen::NoChange, static_trial.frame_count() + moving.frame_count());
