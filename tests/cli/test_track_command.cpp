@@ -480,8 +480,9 @@ TEST(PartialMarkerSets, ProgramMarksTheUnobservedBodyInEveryOutput) {
       {"R.Shoulder", "BT", {105.87, -11.02, 208.03}}, {"R.Wrist", "RW", {7.98, -19.93, -33.38}},
       {"L.Elbow", "LS", {-55.39, -22.45, -153.16}},   {"L.Wrist", "LE", {-3.71, 19.89, -155.31}}};
   for (const auto& [label, frame, offset] : placed) {
+    const std::string& wanted = label;  // a lambda may not capture a structured binding before C++20
     const auto entry = std::find_if(completed.entries.begin(), completed.entries.end(),
-                                    [&](const body::MarkerSetEntry& e) { return e.label == label; });
+                                    [&](const body::MarkerSetEntry& e) { return e.label == wanted; });
     ASSERT_NE(entry, completed.entries.end()) << label;
     EXPECT_EQ(entry->frame, frame) << label;
     EXPECT_LT((entry->offset - offset).norm(), 0.1) << label << ": " << entry->offset.transpose();
