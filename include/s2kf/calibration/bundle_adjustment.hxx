@@ -49,16 +49,22 @@ struct BundleFrame {
   Eigen::Vector3d prior_up = Eigen::Vector3d::Zero();
 };
 
+/// Whether the posture's prior holds `frame` (a frame of the static trial).
+inline bool holds_posture_prior(const BundleFrame& frame) { return frame.prior_joints.size() > 0; }
+
+/// Whether the upright prior holds `frame`.
+inline bool holds_upright(const BundleFrame& frame) { return frame.prior_up.squaredNorm() > 0; }
+
 /// Gives the frames of the static trial (those the posture's prior holds) the lab's vertical for
 /// the upright prior, where options.static_upright_sd_rad asks for it.
 inline void hold_static_frames_upright(std::vector<BundleFrame>& frames, const CalibrationOptions& options) {
   if (!(options.static_upright_sd_rad > 0)) return;
   std::vector<Eigen::Matrix3d> rotations;
   for (const BundleFrame& frame : frames)
-    if (frame.prior_joints.size() > 0) rotations.push_back(frame.rotation);
+    if (holds_posture_prior(frame)) rotations.push_back(frame.rotation);
   const Eigen::Vector3d vertical = nearest_lab_vertical(rotations);
   for (BundleFrame& frame : frames)
-    if (frame.prior_joints.size() > 0) frame.prior_up = vertical;
+    if (holds_posture_prior(frame)) frame.prior_up = vertical;
 }
 
 /// RMS distance (mm) per model marker between the recording and `model` at the frames' poses,
@@ -391,7 +397,7 @@ class BundleAdjustment {
       const auto [begin, end] = chunk_range(frames.size(), c);
       for (std::size_t k = begin; k < end; ++k) {
         chunk_sum[static_cast<std::size_t>(c)] += frame_residual_sum(model, frames[k], true);
-        if (frames[k].prior_joints.size() > 0)
+        if (holds_posture_prior(frames[k]))
           chunk_sum[static_cast<std::size_t>(c)] +=
               pose_prior_weight() * (frames[k].joints - frames[k].prior_joints).squaredNorm();
         if (holds_upright(frames[k]))
@@ -413,28 +419,26 @@ class BundleAdjustment {
     return sum;
   }
 
-  /// Whether the posture's prior holds `frame` (a frame of the static trial).
-  static bool holds_posture_prior(const BundleFrame& frame) { return frame.prior_joints.size() > 0; }
-
   /// The frames the posture's prior holds; at least 1.
   static std::size_t posture_prior_frames(const std::vector<BundleFrame>& frames) {
     const auto count = std::count_if(frames.begin(), frames.end(), holds_posture_prior);
     return std::max<std::size_t>(static_cast<std::size_t>(count), 1);
   }
 
-  /// Per frame; with static_posture_estimated the frames share one prior's weight.
-  double pose_prior_weight() const {
-    const double frames = options_.static_posture_estimated ? std::max<double>(pose_prior_frames_, 1) : 1.0;
-    return 1.0 / (options_.static_pose_sd_rad * options_.static_pose_sd_rad * frames);
+  /// The frames that share one prior's weight: the static trial's with static_posture_estimated,
+  /// else each frame has its own.
+  double prior_sharing_frames() const {
+    return options_.static_posture_estimated ? std::max<double>(pose_prior_frames_, 1) : 1.0;
   }
 
-  /// Whether the upright prior holds `frame`.
-  static bool holds_upright(const BundleFrame& frame) { return frame.prior_up.squaredNorm() > 0; }
+  /// Per frame.
+  double pose_prior_weight() const {
+    return 1.0 / (options_.static_pose_sd_rad * options_.static_pose_sd_rad * prior_sharing_frames());
+  }
 
   /// Per frame, shared over the frames as the posture's prior is.
   double upright_prior_weight() const {
-    const double frames = options_.static_posture_estimated ? std::max<double>(pose_prior_frames_, 1) : 1.0;
-    return 1.0 / (options_.static_upright_sd_rad * options_.static_upright_sd_rad * frames);
+    return 1.0 / (options_.static_upright_sd_rad * options_.static_upright_sd_rad * prior_sharing_frames());
   }
 
   /// The used markers' offsets minus the marker set's, stacked as the subject unknowns order them.
@@ -505,7 +509,7 @@ class BundleAdjustment {
       }
     }
     // The static posture's prior on the joint angles (its Jacobian is the identity).
-    if (frame.prior_joints.size() > 0) {
+    if (holds_posture_prior(frame)) {
       const double w = pose_prior_weight();
       for (int j = 0; j < model.joint_count(); ++j) {
         A(kRoot + j, kRoot + j) += w;
