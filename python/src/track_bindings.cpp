@@ -440,7 +440,7 @@ void bind_track(py::module_& module) {
             static_pose.is_none() ? std::string() : py::str(static_pose).cast<std::string>();
         settings.static_pose_option = "static_pose";
         settings.static_posture = static_posture;
-        settings.threads = app::every_core();
+        settings.threads = every_core();
         return calibrate(recording, out, settings);
       },
       py::arg("recording"), py::kw_only(), py::arg("out") = py::none(), py::arg("static") = false,

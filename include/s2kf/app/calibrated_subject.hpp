@@ -6,16 +6,15 @@
 
 #include <s2kf/app/marker_set_json.hpp>
 
+#include <s2kf/core/parallel_for.hpp>
 #include <s2kf/core/sample_set.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/pipeline/session.hpp>
 
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace s2kf::app {
@@ -44,9 +43,6 @@ struct SubjectSettings {
   double static_upright_sd_deg = 0;
   int threads = 1;  ///< the calibration's threads (every_core() for all)
 };
-
-/// Threads that use every core of this machine (at least one, where the count is unknown).
-inline int every_core() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 struct CalibratedSubject {
   MarkerSetChoice choice;

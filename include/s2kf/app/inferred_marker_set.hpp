@@ -5,13 +5,13 @@
 /// enough of a recording's labels.
 #pragma once
 
-#include <s2kf/app/calibrated_subject.hpp>
 #include <s2kf/app/marker_set_json.hpp>
 #include <s2kf/app/sample_sets.hpp>
 #include <s2kf/app/user_error.hpp>
 
 #include <s2kf/body/marker_set_labels.hpp>
 #include <s2kf/body/non_marker_points.hpp>
+#include <s2kf/core/parallel_for.hpp>
 #include <s2kf/io/atomic_file.hpp>
 #include <s2kf/io/c3d_reader.hpp>
 #include <s2kf/markerset/body_coverage.hpp>

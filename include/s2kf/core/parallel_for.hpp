@@ -12,6 +12,9 @@
 
 namespace s2kf {
 
+/// Threads that use every core of this machine (at least one, where the count is unknown).
+inline int every_core() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+
 /// Calls work(i) for i = 0 .. count - 1 on up to `threads` threads (the calling one included;
 /// each takes the next i not yet taken). An exception thrown by work(i) stops the starting of
 /// further pieces; once all threads are done, the one of the lowest i is rethrown, whatever the
