@@ -91,8 +91,7 @@ SubjectSettings static_trial_settings(const std::string& markerset, double heigh
 
 Eigen::VectorXd static_reference_pose(const body::BodyModel& model, const std::string& name,
                                       const std::string& option) {
-  const std::vector<std::string> names = body::reference_pose_names();
-  if (std::find(names.begin(), names.end(), name) != names.end()) return body::reference_pose(model, name);
+  if (body::is_reference_pose(name)) return body::reference_pose(model, name);
   if (!fs::exists(name))
     throw UserError(option + ": '" + name + "' is neither zero, t-pose, a-pose nor an existing pose CSV");
   io::MotionTable table;

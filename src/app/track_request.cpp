@@ -27,9 +27,7 @@ namespace {
 
 /// Whether the static trial's pose (--static-pose; empty: the nearest reference pose) stands upright.
 bool standing_pose(const std::string& static_pose_name) {
-  const std::vector<std::string> standing = body::reference_pose_names();
-  return static_pose_name.empty() ||
-         std::find(standing.begin(), standing.end(), static_pose_name) != standing.end();
+  return static_pose_name.empty() || body::is_reference_pose(static_pose_name);
 }
 
 /// The static trial's posture where markers were placed by their motion (static_posture "auto"):

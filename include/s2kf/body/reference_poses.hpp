@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,6 +18,12 @@ namespace s2kf::body {
 
 /// The names reference_pose knows, in the order a posture found from the data is chosen among.
 inline std::vector<std::string> reference_pose_names() { return {"zero", "t-pose", "a-pose"}; }
+
+/// Whether `name` is one of reference_pose_names() (not, say, a pose file).
+inline bool is_reference_pose(const std::string& name) {
+  const std::vector<std::string> names = reference_pose_names();
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
 
 /// The joint angles (rad) of a named reference pose; std::invalid_argument for another name.
 inline Eigen::VectorXd reference_pose(const BodyModel& model, const std::string& name) {
