@@ -722,8 +722,6 @@ inline std::vector<MarkerCluster> label_clusters(const InferenceContext& c, cons
   return clusters;
 }
 
-/// One cluster's candidate segments (those its markers are on, the ones next to them, the one its
-/// name says) and how steadily each carries it in the last round of tracking.
 /// Whether any point of the attempt rides on `segment`.
 inline bool segment_carries_markers(const InferenceContext& c, const Attempt& a, const std::string& segment) {
   for (std::size_t i = 0; i < c.points.size(); ++i)
@@ -744,6 +742,8 @@ inline int steadiest_frame_on(const InferenceContext& c, const Attempt& a, std::
   return frame;
 }
 
+/// One cluster's candidate segments (those its markers are on, the ones next to them, the one its
+/// name says) and how steadily each carries it in the last round of tracking.
 struct ClusterCandidates {
   const InferenceContext& c;
   const Attempt& a;
