@@ -167,15 +167,15 @@ TEST(CalibrateCommand, TrackWithAStaticTrialWritesItsSubject) {
     const auto [status, output] = test_support::run_command(command);
     ASSERT_EQ(status, 0) << command << "\n" << output;
   }
-  const std::string common = " --truth " + walk + "_truth.csv --formats csv --quiet --out ";
-  const auto [one, one_output] =
-      test_support::run_command("track " + walk + ".c3d --static " + static_trial + " --static-alone" +
-                                common + (dir / "one").string());
-  ASSERT_EQ(one, 0) << one_output;
-  const auto [two, two_output] =
-      test_support::run_command("track " + walk + ".c3d --subject " + (dir / "subject.json").string() +
-                                common + (dir / "two").string());
-  ASSERT_EQ(two, 0) << two_output;
+  // Tracks the walk with `options` into dir/prefix against its truth; "" or why it failed.
+  const auto track_walk = [&](const std::string& options, const std::string& prefix) {
+    const auto [status, output] =
+        test_support::run_command("track " + walk + ".c3d " + options + " --truth " + walk +
+                                  "_truth.csv --formats csv --quiet --out " + (dir / prefix).string());
+    return status == 0 ? std::string() : "exit status " + std::to_string(status) + ": " + output;
+  };
+  ASSERT_EQ(track_walk("--static " + static_trial + " --static-alone", "one"), "");
+  ASSERT_EQ(track_walk("--subject " + (dir / "subject.json").string(), "two"), "");
   const body::MarkerSet written = app::load_marker_set(dir / "one_subject.json");
   const body::MarkerSet calibrated = app::load_marker_set(dir / "subject.json");
   ASSERT_EQ(written.entries.size(), calibrated.entries.size());
@@ -188,13 +188,8 @@ TEST(CalibrateCommand, TrackWithAStaticTrialWritesItsSubject) {
   EXPECT_DOUBLE_EQ(truth_of("one")["segment_orientation_rms_deg"].get<double>(),
                    truth_of("two")["segment_orientation_rms_deg"].get<double>());
   // Calibrated together: a subject of its own (not the static trial's), which reproduces the run.
-  const auto [joint, joint_output] = test_support::run_command(
-      "track " + walk + ".c3d --static " + static_trial + common + (dir / "joint").string());
-  ASSERT_EQ(joint, 0) << joint_output;
-  const auto [again, again_output] =
-      test_support::run_command("track " + walk + ".c3d --subject " + (dir / "joint_subject.json").string() +
-                                common + (dir / "again").string());
-  ASSERT_EQ(again, 0) << again_output;
+  ASSERT_EQ(track_walk("--static " + static_trial, "joint"), "");
+  ASSERT_EQ(track_walk("--subject " + (dir / "joint_subject.json").string(), "again"), "");
   const body::MarkerSet joint_subject = app::load_marker_set(dir / "joint_subject.json");
   ASSERT_EQ(joint_subject.entries.size(), calibrated.entries.size());
   double moved = 0;

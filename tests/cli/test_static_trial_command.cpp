@@ -12,7 +12,6 @@
 
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <string>
 
 #include "test_files.hpp"
@@ -158,11 +157,9 @@ TEST(StaticTrialCommand, TheStaticTrialAndTheRecordingAreCalibratedTogether) {
                                    "recording together is what --static does now"),
             std::string::npos)
       << deprecated_output;
-  const auto text = [](const fs::path& path) {
-    std::ifstream in(path);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
-  EXPECT_EQ(text(dir / "refined.csv"), text(dir / "joint.csv"));  // the same motion, to the digit
+  // The same motion, to the digit.
+  ASSERT_TRUE(fs::exists(dir / "refined.csv"));
+  EXPECT_EQ(test_support::read_text(dir / "refined.csv"), test_support::read_text(dir / "joint.csv"));
 
   const auto [wrong, wrong_output] = test_support::run_command("track " + walk + " --static " + trial +
                                                                " --static-pose zero --static-posture exact " +
