@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <set>
@@ -138,10 +139,11 @@ TEST_P(RealFile, MatchesIndependentReference) {
 }
 
 INSTANTIATE_TEST_SUITE_P(C3dFiles, RealFile,
-                         ::testing::Values("85_02.c3d", "AlbertoINT.c3d", "BTS.c3d", "Dance.c3d",
+                         ::testing::Values("85_02.c3d", "85_12.c3d", "AlbertoINT.c3d", "BTS.c3d", "Dance.c3d",
                                            "Eb015pi.c3d", "Eb015sr.c3d", "Eb015vr.c3d", "Empty.c3d",
                                            "HDM_mm_01-02_03_120.c3d", "MACsample.c3d", "MotionMonitorC3D.c3d",
-                                           "Optotrak.c3d", "PiG_Motion-FlatFoot-One.c3d", "Vicon.c3d",
+                                           "Optotrak.c3d", "PiG_Motion-FlatFoot-One.c3d",
+                                           "PiG_Movement_trial.c3d", "PiG_Static_trial.c3d", "Vicon.c3d",
                                            "Walk1.c3d", "bad_parameter_section.c3d", "phasespace_sample.c3d",
                                            "simple.c3d", "test1.c3d"),
                          [](const auto& info) {
@@ -154,7 +156,11 @@ INSTANTIATE_TEST_SUITE_P(C3dFiles, RealFile,
 TEST(C3dRealFiles, EveryFileInTheDataDirectoryHasAnExpectation) {
   std::set<std::string> listed;
   for (const auto& entry : expected_files()) listed.insert(entry["file"].get<std::string>());
-  EXPECT_EQ(listed.size(), 19u);
+  std::set<std::string> present;
+  for (const auto& file : std::filesystem::directory_iterator(S2KF_C3D_DATA_DIR))
+    if (file.path().extension() == ".c3d") present.insert(file.path().filename().string());
+  EXPECT_EQ(present, listed);
+  EXPECT_EQ(listed.size(), 22u);
 }
 
 TEST(C3dRealFiles, IntelDecAndMipsEncodingsOfSample01Agree) {
