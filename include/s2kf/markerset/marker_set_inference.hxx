@@ -10,6 +10,8 @@
 #include <s2kf/pipeline/session.hpp>
 #include <s2kf/track/tracker.hpp>
 
+#include <cctype>
+
 namespace s2kf::markerset {
 namespace detail {
 
@@ -695,6 +697,13 @@ inline std::string named_marker_segment(const std::string& label) {
 /// the simulated subjects' markers by 8 mm each, a joint between two of them by centimetres.
 inline constexpr double kClusterSteadySdMm = 20.0;
 
+/// Whether a cluster's stem names something: it holds a letter. Capture software numbers the
+/// trajectories it could not label (Vicon's *115, *116, ...): a shared count is no shared plate.
+inline bool stem_is_a_name(const std::string& stem) {
+  return std::any_of(stem.begin(), stem.end(),
+                     [](char ch) { return std::isalpha(static_cast<unsigned char>(ch)); });
+}
+
 /// The clusters among the points not `fixed`, by their labels; steady ones only.
 inline std::vector<MarkerCluster> label_clusters(const InferenceContext& c, const std::vector<bool>& fixed) {
   std::map<std::string, std::vector<std::size_t>> by_stem;
@@ -703,6 +712,7 @@ inline std::vector<MarkerCluster> label_clusters(const InferenceContext& c, cons
     const std::string label = upper_case(c.label(c.points[i]));
     const char last = label.empty() ? ' ' : label.back();
     if (label.size() < 3 || !((last >= 'A' && last <= 'H') || (last >= '1' && last <= '9'))) continue;
+    if (!stem_is_a_name(label.substr(0, label.size() - 1))) continue;
     by_stem[label.substr(0, label.size() - 1)].push_back(i);
   }
   std::vector<MarkerCluster> clusters;
