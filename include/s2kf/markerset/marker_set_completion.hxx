@@ -6,25 +6,7 @@
 #include <s2kf/markerset/marker_set_completion.hpp>
 #include <s2kf/markerset/marker_set_inference.hxx>
 
-#include <s2kf/calibration/height_estimate.hpp>
-#include <s2kf/io/frame_source.hpp>
-
-#include <optional>
-
 namespace s2kf::markerset {
-
-namespace detail {
-
-/// The body height the known set's rigid marker pairs give (0 where they form none).
-inline double known_markers_height(const MarkerSequence& recording, const body::BodyModel& wearing,
-                                   const body::MarkerMapping& mapping) {
-  SequenceFrameSource source(recording);
-  const std::optional<calibration::HeightEstimate> estimate =
-      calibration::estimate_height(source, wearing, mapping);
-  return estimate ? estimate->mm : 0.0;
-}
-
-}  // namespace detail
 
 S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recording,
                                                    const body::MarkerSet& known, const SampleSet& samples,
@@ -116,13 +98,7 @@ S2KF_INLINE CompletedMarkerSet complete_marker_set(const MarkerSequence& recordi
   result.cluster_notes = kept.cluster_notes;
 
   const std::vector<detail::PlacedMarker> placed = detail::marker_confidence(c, kept);
-  // The placed markers' offsets are measured at the height the rounds tracked at; written for the
-  // known markers' height, so that their rigid pairs give the tracking that height, not the rounds'
-  // (twelve foot markers outnumbered Plug-in Gait's pairs, shrank a subject by 9 % and left its
-  // calibration at 17 mm instead of 5).
-  const double known_height = detail::known_markers_height(recording, wearing, mapping);
-  const double to_reference = known.reference_height_mm / 1000.0 *
-                              (known_height > 0 && kept.height > 0 ? kept.height / known_height : 1.0);
+  const double to_reference = known.reference_height_mm / 1000.0;
   for (std::size_t i = 0; i < c.points.size(); ++i) {
     if (fixed[i]) continue;
     const std::string segment = body::segment_of_frame(c.base, kept.frame_of[i]);
