@@ -69,11 +69,22 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
       }
     }
     const double threshold = std::max(options.outlier_floor_mm, 4.0 * track::quantile(all, 0.5));
+    // A marker off by as much in most frames sits elsewhere on this subject than the model puts
+    // it, which the adjustment corrects: its own median residual raises its threshold. (Markers
+    // placed by their motion fit the uncalibrated model by construction, lowered the round's
+    // median and left Plug-in Gait's PSIS markers out of every frame.)
+    std::vector<double> own_threshold(used.size(), threshold);
+    for (std::size_t u = 0; u < used.size(); ++u) {
+      std::vector<double> own;
+      for (std::size_t k = 0; k < frames.size(); ++k)
+        if (distances[k][u] >= 0) own.push_back(distances[k][u]);
+      if (!own.empty()) own_threshold[u] = std::max(threshold, 4.0 * track::quantile(own, 0.5));
+    }
     std::vector<detail::BundleFrame> kept;
     for (std::size_t k = 0; k < frames.size(); ++k) {
       for (std::size_t u = 0; u < used.size(); ++u) {
         if (distances[k][u] < 0) continue;
-        if (distances[k][u] > threshold)
+        if (distances[k][u] > own_threshold[u])
           ++pass.residuals_rejected;
         else
           frames[k].markers.push_back(static_cast<int>(u));
