@@ -69,16 +69,17 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
       }
     }
     const double threshold = std::max(options.outlier_floor_mm, 4.0 * track::quantile(all, 0.5));
-    // A marker off by as much in most frames sits elsewhere on this subject than the model puts
-    // it, which the adjustment corrects: its own median residual raises its threshold. (Markers
-    // placed by their motion fit the uncalibrated model by construction, lowered the round's
-    // median and left Plug-in Gait's PSIS markers out of every frame.)
+    // A marker beyond that in most frames sits elsewhere on this subject than the model puts it,
+    // which the adjustment corrects, so 4 x its own median is its threshold. (Markers placed by
+    // their motion fit the uncalibrated model by construction, lowered the round's median and left
+    // Plug-in Gait's PSIS markers out of every frame.)
     std::vector<double> own_threshold(used.size(), threshold);
     for (std::size_t u = 0; u < used.size(); ++u) {
       std::vector<double> own;
       for (std::size_t k = 0; k < frames.size(); ++k)
         if (distances[k][u] >= 0) own.push_back(distances[k][u]);
-      if (!own.empty()) own_threshold[u] = std::max(threshold, 4.0 * track::quantile(own, 0.5));
+      if (const double median = own.empty() ? 0.0 : track::quantile(own, 0.5); median > threshold)
+        own_threshold[u] = 4.0 * median;
     }
     std::vector<detail::BundleFrame> kept;
     for (std::size_t k = 0; k < frames.size(); ++k) {
