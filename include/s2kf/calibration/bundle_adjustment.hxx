@@ -5,6 +5,7 @@
 #pragma once
 
 #include <s2kf/calibration/subject_calibration.hpp>
+#include <s2kf/core/bordered_cholesky.hpp>
 #include <s2kf/core/parallel_for.hpp>
 #include <s2kf/core/product_tiles.hpp>
 
@@ -359,6 +360,9 @@ class BundleAdjustment {
           frames = std::move(trial_frames);
           cumulative_ = std::move(trial_cumulative);
           current = trial;
+          // Lowered only after a step the first damping tried gave: after a refusal the lower
+          // damping has just failed at this linearisation, and trying it first again at the next
+          // one mostly fails too (a Levenberg-Marquardt crawl at a steady damping solved twice).
           damping = std::max(damping / 10, 1e-9);
           if (decrease <= options_.relative_tolerance * current) it = options_.bundle_iterations;
         } else {
@@ -465,6 +469,8 @@ class BundleAdjustment {
     Eigen::Matrix<double, 3, Eigen::Dynamic> jq(3, n), js(3, scales_);
     std::vector<int> active;  // the columns of jq a marker moves: the root's and its chain's joints
     active.reserve(static_cast<std::size_t>(n));
+    std::vector<int> scaled;  // the length factors that move it (js's non-zero columns)
+    scaled.reserve(static_cast<std::size_t>(std::max(scales_, 0)));
     for (int u : frame.markers) {
       const int m = used_[static_cast<std::size_t>(u)];
       const double w = weight_[static_cast<std::size_t>(u)];
@@ -478,34 +484,40 @@ class BundleAdjustment {
       const Eigen::Vector3d arm = p - frame.position;
       for (int k = 0; k < 3; ++k) jq.col(3 + k) = frame.rotation.col(k).cross(arm);  // R <- R Exp(omega)
       active.assign({0, 1, 2, 3, 4, 5});
+      scaled.clear();
       for (int f = marker.frame; f > 0; f = model.joints[static_cast<std::size_t>(f - 1)].parent_frame) {
         const body::Joint& joint = model.joints[static_cast<std::size_t>(f - 1)];
         const auto fs = static_cast<std::size_t>(f);
         jq.col(kRoot + f - 1) = tf.rotations[fs].col(static_cast<int>(joint.axis)).cross(p - tf.origins[fs]);
         active.push_back(kRoot + f - 1);
         const int s = joint_scale_[static_cast<std::size_t>(f - 1)];
-        if (s >= 0)
+        if (s >= 0) {
+          if (std::find(scaled.begin(), scaled.end(), s) == scaled.end()) scaled.push_back(s);
           js.col(s) += tf.rotations[static_cast<std::size_t>(joint.parent_frame)] * joint.translation;
+        }
       }
       const Eigen::Matrix3d& ro = tf.rotations[mf];  // d p / d offset
       const int at = scales_ + 3 * u;
       // A += w jq^T jq, g += w jq^T r, B += w jq^T [js ro] over the active columns only: the
-      // others of jq are exactly zero (a marker moves with the root and its own chain, about 16 of
-      // the 46 columns), so this is the dense product's result at a tenth of its work.
+      // others of jq and js are exactly zero (a marker moves with the root and its own chain, about
+      // 16 of the 46 columns, and with the length factors along that chain), so this is the dense
+      // product's result at a tenth of its work, in fixed-size products (Eigen's general product
+      // for every marker's 3 x 12 blocks cost more than the sums themselves).
       for (const int a : active) {
         const Eigen::Vector3d ja = w * jq.col(a);
         for (const int b : active) A(b, a) += ja.dot(jq.col(b));
         g(a) += ja.dot(r);
         B.block<1, 3>(a, at) += ja.transpose() * ro;
-        if (scales_ > 0) B.row(a).head(scales_) += ja.transpose() * js;
+        for (const int s : scaled) B(a, s) += ja.dot(js.col(s));
       }
       h.segment<3>(at).noalias() += w * ro.transpose() * r;
       C.block<3, 3>(at, at).diagonal().array() += w;
-      if (scales_ > 0) {
-        C.topLeftCorner(scales_, scales_).noalias() += w * js.transpose() * js;
-        C.block(0, at, scales_, 3).noalias() += w * js.transpose() * ro;
-        C.block(at, 0, 3, scales_).noalias() += w * ro.transpose() * js;
-        h.head(scales_).noalias() += w * js.transpose() * r;
+      for (const int s : scaled) {
+        const Eigen::Vector3d js_w = w * js.col(s);
+        for (const int t : scaled) C(t, s) += js_w.dot(js.col(t));
+        C.block<1, 3>(s, at) += js_w.transpose() * ro;
+        C.block<3, 1>(at, s) += ro.transpose() * js_w;
+        h(s) += js_w.dot(r);
       }
     }
     // The static posture's prior on the joint angles (its Jacobian is the identity).
@@ -680,24 +692,31 @@ class BundleAdjustment {
                                                Eigen::MatrixXd::Zero(unknowns_, unknowns_));
     std::vector<Eigen::VectorXd> chunk_rhs(kCalibrationChunks, Eigen::VectorXd::Zero(unknowns_));
     std::vector<char> solvable(kCalibrationChunks, 1);
-    std::vector<Eigen::LLT<Eigen::MatrixXd>> factors(normal.A.size());
+    std::vector<Eigen::MatrixXd> factors(normal.A.size());  // each frame's L, A + damping = L L^T
     parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(normal.A.size(), c);
       const auto at = static_cast<std::size_t>(c);
-      Eigen::MatrixXd A, X, Xt;
+      // [A; B^T; g^T] factorised in one pass into [L; B^T L^-T; g^T L^-T] = [L; X^T; z^T], in the
+      // tiles compiled for the processor (Eigen's LLT and triangular solve took twice as long).
+      BorderedCholesky panel;
+      Eigen::MatrixXd A;
       for (std::size_t k = begin; k < end && solvable[at]; ++k) {
         A = normal.A[k];
         damp(A, damping);
-        factors[k].compute(A);
-        if (factors[k].info() != Eigen::Success) {
+        const Eigen::Index n = A.rows();
+        panel.resize(n, unknowns_ + 1);
+        auto p = panel.panel();
+        p.topRows(n) = A;
+        p.middleRows(n, unknowns_) = normal.B[k].transpose();
+        p.row(n + unknowns_) = normal.g[k].transpose();
+        if (!panel.factorise()) {
           solvable[at] = 0;
           break;
         }
-        X = factors[k].matrixL().solve(normal.B[k]);  // L^-1 B
-        const Eigen::VectorXd z = factors[k].matrixL().solve(normal.g[k]);
-        Xt = X.transpose();  // column-major for the product tiles compiled for the processor
-        add_self_product_lower(chunk_reduced[at], Xt, -1.0);
-        chunk_rhs[at].noalias() -= X.transpose() * z;
+        factors[k] = p.topRows(n).triangularView<Eigen::Lower>();
+        const auto xt = p.middleRows(n, unknowns_);  // X^T = (L^-1 B)^T
+        add_self_product_lower(chunk_reduced[at], xt, -1.0);
+        chunk_rhs[at].noalias() -= xt * p.row(n + unknowns_).transpose();  // X^T z, z = L^-1 g
       }
     });
     if (std::find(solvable.begin(), solvable.end(), 0) != solvable.end()) return false;
@@ -746,9 +765,12 @@ class BundleAdjustment {
     std::vector<char> finite(kCalibrationChunks, 1);
     parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(trial_frames.size(), c);
-      for (std::size_t k = begin; k < end; ++k)
-        if (!step_frame(model, factors[k].solve(normal.g[k] - normal.B[k] * subject_step), trial_frames[k]))
-          finite[static_cast<std::size_t>(c)] = 0;
+      for (std::size_t k = begin; k < end; ++k) {
+        Eigen::VectorXd pose_step = normal.g[k] - normal.B[k] * subject_step;  // A^-1 (g - B s)
+        factors[k].triangularView<Eigen::Lower>().solveInPlace(pose_step);
+        factors[k].triangularView<Eigen::Lower>().transpose().solveInPlace(pose_step);
+        if (!step_frame(model, pose_step, trial_frames[k])) finite[static_cast<std::size_t>(c)] = 0;
+      }
     });
     if (std::find(finite.begin(), finite.end(), 0) != finite.end()) return false;
     for (int j = 0; j < trial_model.joint_count(); ++j) {
