@@ -43,7 +43,7 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
   options.calibration_may_fail = false;
   options.calibration_frames = settings.frames;
   options.calibration.iterations = settings.iterations;
-  options.calibration.final_pass = true;
+  options.calibration.final_pass = settings.final_pass;
   options.calibration.threads = settings.threads;
   options.calibration.estimate_segment_scales = !settings.no_scales;
   options.calibration.weak_direction_shrink = settings.shrink;

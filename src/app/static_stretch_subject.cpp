@@ -33,6 +33,7 @@ StretchSubject static_stretch_subject(FrameSource& source, const std::string& in
   subject_settings.set = choice.set;
   subject_settings.threads = threads;
   subject_settings.frames = stretch->count;
+  subject_settings.final_pass = false;  // only the subject and its posture are used here
   const MarkerSequence frames = read_frames(source, stretch->first, stretch->count);
   SequenceFrameSource still(frames);
   CalibratedSubject calibrated;

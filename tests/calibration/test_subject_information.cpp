@@ -2,18 +2,25 @@
 // checked by what it must be whatever the body: a symmetric positive semi-definite matrix over the
 // length factors and the mapped markers' offsets, nothing for a marker no frame shows, and, with
 // every pose counted twice, twice the offsets' information while the length factors' stays (their
-// prior grows with the frames) and the threshold doubles.
+// prior grows with the frames) and the threshold doubles; and, at one pose, the Schur complement of
+// the normal equations of a Jacobian taken by central differences of the forward kinematics.
 #include <s2kf/body/body_model.hpp>
+#include <s2kf/body/forward_kinematics.hpp>
+#include <s2kf/body/marker_set.hpp>
 #include <s2kf/calibration/subject_information.hpp>
 #include <s2kf/sim/random_sweep.hpp>
 #include <s2kf/sim/recording.hpp>
 #include <s2kf/sim/subject.hpp>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -102,6 +109,72 @@ TEST(SubjectInformation, EveryPoseTwiceDoublesTheOffsetsInformationAndKeepsTheLe
       close(twice.information.topLeftCorner(scales, scales), once.information.topLeftCorner(scales, scales)));
   EXPECT_TRUE(close(twice.information.topRightCorner(scales, offsets),
                     std::sqrt(2.0) * once.information.topRightCorner(scales, offsets)));
+}
+
+// The markers (3 x M, stacked) at a pose and a subject: the root moved by dx, turned by Exp(omega)
+// on the right, the joints by dq; the segments' bones lengthened by (1 + their factor), the offsets
+// moved by the subject step.
+Eigen::VectorXd stacked_markers(const body::BodyModel& model, const body::Pose& pose,
+                                const std::vector<std::string>& segments, const Eigen::VectorXd& pose_step,
+                                const Eigen::VectorXd& subject_step) {
+  body::BodyModel moved = model;
+  for (body::Joint& joint : moved.joints) {
+    const std::string segment = body::segment_of_frame(model, joint.parent_frame);
+    for (std::size_t s = 0; s < segments.size(); ++s)
+      if (segments[s] == segment) joint.translation *= 1.0 + subject_step(static_cast<Eigen::Index>(s));
+  }
+  const auto scales = static_cast<Eigen::Index>(segments.size());
+  for (int m = 0; m < moved.marker_count(); ++m)
+    moved.markers[static_cast<std::size_t>(m)].offset += subject_step.segment<3>(scales + 3 * m);
+  const Eigen::Vector3d omega = pose_step.segment<3>(3);
+  const Eigen::Matrix3d turn = omega.norm() > 0
+                                   ? Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix()
+                                   : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3Xd markers =
+      body::marker_positions(moved, pose.root_position + pose_step.head<3>(), pose.root_rotation() * turn,
+                             pose.joints + pose_step.tail(pose.joints.size()));
+  return Eigen::Map<const Eigen::VectorXd>(markers.data(), markers.size());
+}
+
+TEST(SubjectInformation, AtOnePoseIsTheSchurComplementOfTheFiniteDifferenceNormalEquations) {
+  Sweep s = sweep();
+  // A pose with every joint inside its limits (a joint on a limit is held there by the adjustment).
+  const body::BodyModel& model = s.subject.model;
+  std::size_t chosen = s.poses.size();
+  for (std::size_t k = 0; k < s.poses.size() && chosen == s.poses.size(); ++k) {
+    bool inside = true;
+    for (int j = 0; j < model.joint_count(); ++j) {
+      const double q = s.poses[k].second.joints(j);
+      inside = inside && q > model.joints[static_cast<std::size_t>(j)].lower + 1e-3 &&
+               q < model.joints[static_cast<std::size_t>(j)].upper - 1e-3;
+    }
+    if (inside) chosen = k;
+  }
+  ASSERT_LT(chosen, s.poses.size());
+  s.poses = {s.poses[chosen]};
+  const calibration::SubjectInformation info = information_of(s);
+  const body::Pose& pose = s.poses.front().second;
+  const auto n = static_cast<Eigen::Index>(6 + model.joint_count());
+  const Eigen::Index unknowns = info.information.rows();
+  // Central differences of the stacked markers over [pose, subject].
+  Eigen::MatrixXd jacobian(3 * model.marker_count(), n + unknowns);
+  const double h = 1e-5;
+  for (Eigen::Index c = 0; c < n + unknowns; ++c) {
+    Eigen::VectorXd step = Eigen::VectorXd::Zero(n + unknowns);
+    step(c) = h;
+    jacobian.col(c) = (stacked_markers(model, pose, info.segments, step.head(n), step.tail(unknowns)) -
+                       stacked_markers(model, pose, info.segments, -step.head(n), -step.tail(unknowns))) /
+                      (2 * h);
+  }
+  const Eigen::MatrixXd normal = jacobian.transpose() * jacobian / kNoiseVariance;
+  Eigen::MatrixXd A = normal.topLeftCorner(n, n);
+  A.diagonal().array() += 1e-9 * A.diagonal().maxCoeff();  // the adjustment's floor for unseen directions
+  const Eigen::MatrixXd B = normal.topRightCorner(n, unknowns);
+  const Eigen::MatrixXd reduced =
+      normal.bottomRightCorner(unknowns, unknowns) - B.transpose() * A.llt().solve(B);
+  const Eigen::MatrixXd expected = info.prior_sd.asDiagonal() * reduced * info.prior_sd.asDiagonal();
+  EXPECT_LT((info.information - expected).norm(), 1e-6 * expected.norm());
+  EXPECT_GT(expected.norm(), 1.0);
 }
 
 TEST(SubjectInformation, APoseOutsideTheRecordingIsRefused) {

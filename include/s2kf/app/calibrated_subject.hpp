@@ -42,6 +42,9 @@ struct SubjectSettings {
   /// (calibration::CalibrationOptions::static_upright_sd_rad); 0: its tilt is free.
   double static_upright_sd_deg = 0;
   int threads = 1;  ///< the calibration's threads (every_core() for all)
+  /// Track the recording once more with the calibrated subject for its mean marker distance after
+  /// calibration; false where nobody reads it (a still stretch tried as a static trial).
+  bool final_pass = true;
 };
 
 struct CalibratedSubject {

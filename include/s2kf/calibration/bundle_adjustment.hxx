@@ -584,15 +584,37 @@ class BundleAdjustment {
   /// The subject's information from the data alone: the reduced normal matrix of the bundle
   /// adjustment without priors or damping (the poses eliminated frame by frame), full.
   Eigen::MatrixXd data_information(const NormalEquations& normal) const {
-    Eigen::MatrixXd information = normal.C, A, X;
-    for (std::size_t k = 0; k < normal.A.size(); ++k) {
-      A = normal.A[k];
-      damp(A, 0);  // the floor alone: directions no marker sees stay solvable
-      const Eigen::LLT<Eigen::MatrixXd> factor(A);
-      X = factor.matrixL().solve(normal.B[k]);
-      information.noalias() -= X.transpose() * X;
-    }
+    Eigen::MatrixXd information = normal.C;
+    Eigen::VectorXd unused = Eigen::VectorXd::Zero(unknowns_);
+    BorderedCholesky panel;
+    Eigen::MatrixXd factor;
+    for (std::size_t k = 0; k < normal.A.size(); ++k)  // the floor alone: unseen directions stay solvable
+      eliminate_pose(normal, k, 0, panel, factor, information, unused);
+    information.triangularView<Eigen::StrictlyUpper>() = information.transpose();
     return information;
+  }
+
+  /// Eliminates frame k's pose from the normal equations: A + damping = L L^T (`factor` receives
+  /// L) and the frame's share of the reduced system, -X^T X into the lower half of `reduced` and
+  /// -X^T z into `rhs` (X = L^-1 B, z = L^-1 g). [A; B^T; g^T] is factorised in one pass into
+  /// [L; X^T; z^T] in the tiles compiled for the processor (Eigen's LLT and triangular solve took
+  /// twice as long). False if the damped A is not positive definite.
+  bool eliminate_pose(const NormalEquations& normal, std::size_t k, double damping, BorderedCholesky& panel,
+                      Eigen::MatrixXd& factor, Eigen::MatrixXd& reduced, Eigen::VectorXd& rhs) const {
+    factor = normal.A[k];
+    damp(factor, damping);
+    const Eigen::Index n = factor.rows();
+    panel.resize(n, unknowns_ + 1);
+    auto p = panel.panel();
+    p.topRows(n) = factor;
+    p.middleRows(n, unknowns_) = normal.B[k].transpose();
+    p.row(n + unknowns_) = normal.g[k].transpose();
+    if (!panel.factorise()) return false;
+    factor = p.topRows(n).triangularView<Eigen::Lower>();
+    const auto xt = p.middleRows(n, unknowns_);
+    add_self_product_lower(reduced, xt, -1.0);
+    rhs.noalias() -= xt * p.row(n + unknowns_).transpose();
+    return true;
   }
 
   /// data_information in the prior's metric (information_in_prior_metric), at the current
@@ -696,28 +718,10 @@ class BundleAdjustment {
     parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(normal.A.size(), c);
       const auto at = static_cast<std::size_t>(c);
-      // [A; B^T; g^T] factorised in one pass into [L; B^T L^-T; g^T L^-T] = [L; X^T; z^T], in the
-      // tiles compiled for the processor (Eigen's LLT and triangular solve took twice as long).
       BorderedCholesky panel;
-      Eigen::MatrixXd A;
-      for (std::size_t k = begin; k < end && solvable[at]; ++k) {
-        A = normal.A[k];
-        damp(A, damping);
-        const Eigen::Index n = A.rows();
-        panel.resize(n, unknowns_ + 1);
-        auto p = panel.panel();
-        p.topRows(n) = A;
-        p.middleRows(n, unknowns_) = normal.B[k].transpose();
-        p.row(n + unknowns_) = normal.g[k].transpose();
-        if (!panel.factorise()) {
+      for (std::size_t k = begin; k < end && solvable[at]; ++k)
+        if (!eliminate_pose(normal, k, damping, panel, factors[k], chunk_reduced[at], chunk_rhs[at]))
           solvable[at] = 0;
-          break;
-        }
-        factors[k] = p.topRows(n).triangularView<Eigen::Lower>();
-        const auto xt = p.middleRows(n, unknowns_);  // X^T = (L^-1 B)^T
-        add_self_product_lower(chunk_reduced[at], xt, -1.0);
-        chunk_rhs[at].noalias() -= xt * p.row(n + unknowns_).transpose();  // X^T z, z = L^-1 g
-      }
     });
     if (std::find(solvable.begin(), solvable.end(), 0) != solvable.end()) return false;
     Eigen::MatrixXd reduced = chunk_reduced[0];
