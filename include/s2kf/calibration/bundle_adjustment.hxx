@@ -455,14 +455,15 @@ class BundleAdjustment {
     return e;
   }
 
-  /// One frame's normal equations: A (pose x pose), B (pose x subject), the pose gradient g, and
+  /// One frame's normal equations: A (pose x pose), B^T (subject x pose: the rows beneath A in the
+  /// elimination's panel, copied without a transposition), the pose gradient g, and
   /// the frame's share of the subject block C and gradient h (added to them). Pose columns are
   /// [root position, rotation vector on the right of the root rotation, joints].
   void linearise(const body::BodyModel& model, const BundleFrame& frame, Eigen::MatrixXd& A,
-                 Eigen::MatrixXd& B, Eigen::VectorXd& g, Eigen::MatrixXd& C, Eigen::VectorXd& h) const {
+                 Eigen::MatrixXd& Bt, Eigen::VectorXd& g, Eigen::MatrixXd& C, Eigen::VectorXd& h) const {
     const int n = kRoot + model.joint_count();
     A.setZero(n, n);
-    B.setZero(n, unknowns_);
+    Bt.setZero(unknowns_, n);
     g.setZero(n);
     const body::FrameTransforms tf = body::joint_frames(model, frame.position, frame.rotation, frame.joints);
     const auto y = recording_.frame(frame.index);
@@ -507,8 +508,8 @@ class BundleAdjustment {
         const Eigen::Vector3d ja = w * jq.col(a);
         for (const int b : active) A(b, a) += ja.dot(jq.col(b));
         g(a) += ja.dot(r);
-        B.block<1, 3>(a, at) += ja.transpose() * ro;
-        for (const int s : scaled) B(a, s) += ja.dot(js.col(s));
+        Bt.block<3, 1>(at, a) += ro.transpose() * ja;
+        for (const int s : scaled) Bt(s, a) += ja.dot(js.col(s));
       }
       h.segment<3>(at).noalias() += w * ro.transpose() * r;
       C.block<3, 3>(at, at).diagonal().array() += w;
@@ -548,7 +549,7 @@ class BundleAdjustment {
         A.row(kRoot + j).setZero();
         A.col(kRoot + j).setZero();
         A(kRoot + j, kRoot + j) = 1;
-        B.row(kRoot + j).setZero();
+        Bt.col(kRoot + j).setZero();
         g(kRoot + j) = 0;
       }
     }
@@ -557,7 +558,7 @@ class BundleAdjustment {
   /// Every frame's blocks at one linearisation point (reused by the attempts that search the
   /// damping): about 80 KB per frame, 25 MB for the 300 frames of a 1200-frame calibration.
   struct NormalEquations {
-    std::vector<Eigen::MatrixXd> A, B;
+    std::vector<Eigen::MatrixXd> A, Bt;
     std::vector<Eigen::VectorXd> g;
     Eigen::MatrixXd C;
     Eigen::VectorXd h;
@@ -566,7 +567,7 @@ class BundleAdjustment {
   void linearise_all(const body::BodyModel& model, const std::vector<BundleFrame>& frames,
                      NormalEquations& normal) const {
     normal.A.resize(frames.size());
-    normal.B.resize(frames.size());
+    normal.Bt.resize(frames.size());
     normal.g.resize(frames.size());
     std::vector<Eigen::MatrixXd> C(kCalibrationChunks, Eigen::MatrixXd::Zero(unknowns_, unknowns_));
     std::vector<Eigen::VectorXd> h(kCalibrationChunks, Eigen::VectorXd::Zero(unknowns_));
@@ -574,7 +575,7 @@ class BundleAdjustment {
       const auto [begin, end] = chunk_range(frames.size(), c);
       const auto at = static_cast<std::size_t>(c);
       for (std::size_t k = begin; k < end; ++k)
-        linearise(model, frames[k], normal.A[k], normal.B[k], normal.g[k], C[at], h[at]);
+        linearise(model, frames[k], normal.A[k], normal.Bt[k], normal.g[k], C[at], h[at]);
     });
     normal.C = C[0];
     normal.h = h[0];
@@ -607,7 +608,7 @@ class BundleAdjustment {
     panel.resize(n, unknowns_ + 1);
     auto p = panel.panel();
     p.topRows(n) = factor;
-    p.middleRows(n, unknowns_) = normal.B[k].transpose();
+    p.middleRows(n, unknowns_) = normal.Bt[k];
     p.row(n + unknowns_) = normal.g[k].transpose();
     if (!panel.factorise()) return false;
     factor = p.topRows(n).triangularView<Eigen::Lower>();
@@ -770,7 +771,8 @@ class BundleAdjustment {
     parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(trial_frames.size(), c);
       for (std::size_t k = begin; k < end; ++k) {
-        Eigen::VectorXd pose_step = normal.g[k] - normal.B[k] * subject_step;  // A^-1 (g - B s)
+        Eigen::VectorXd pose_step = normal.g[k];  // A^-1 (g - B s)
+        pose_step.noalias() -= normal.Bt[k].transpose() * subject_step;
         factors[k].triangularView<Eigen::Lower>().solveInPlace(pose_step);
         factors[k].triangularView<Eigen::Lower>().transpose().solveInPlace(pose_step);
         if (!step_frame(model, pose_step, trial_frames[k])) finite[static_cast<std::size_t>(c)] = 0;
