@@ -3,7 +3,8 @@
 
 links:   every relative link points to a file or folder that exists and, with #anchor, to a
          heading of that page (GitHub's anchors: lower case, punctuation dropped, spaces to -).
-length:  no page is longer than 500 lines.
+length:  no page is longer than 500 lines; CHANGELOG.md is left out: it gains an entry with every
+         change, and its history is not cut to fit.
 dates:   no page dates a fact by a "session" (an ordinal, "this", "that" and the like before it).
 paths:   every repository path a page names in backticks (`include/...`, `tests/...`, ...) exists;
          the dated notes under docs/notes/ and CHANGELOG.md are left out, as they name the files
@@ -96,6 +97,8 @@ def check_links(root):
 def check_length(root):
     problems = []
     for page in pages(root):
+        if os.path.basename(page) == "CHANGELOG.md":
+            continue
         with open(page, encoding="utf-8") as f:
             count = sum(1 for _ in f)
         if count > MAX_LINES:
