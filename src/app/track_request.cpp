@@ -9,9 +9,11 @@
 #include <s2kf/app/user_error.hpp>
 
 #include <s2kf/body/reference_poses.hpp>
+#include <s2kf/calibration/static_trial_markers.hpp>
 #include <s2kf/evaluation/truth_metrics.hpp>
 #include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/c3d_reader.hpp>
+#include <s2kf/track/segment_observation.hpp>
 #include <s2kf/track/tracking_smoother.hpp>
 
 #include <algorithm>
@@ -39,6 +41,82 @@ void hold_placed_markers_posture(SubjectSettings& settings) {
   settings.static_posture = "exact";
   settings.static_sd_deg = std::min(settings.static_sd_deg, kPlacedMarkersStaticSdDeg);
   if (standing_pose(settings.static_pose_name)) settings.static_upright_sd_deg = settings.static_sd_deg;
+}
+
+/// The recording's frames the calibration reads (pipeline::calibration_stretches), one after another.
+MarkerSequence calibration_frames_of(FrameSource& source, const pipeline::SessionOptions& options) {
+  MarkerSequence frames;
+  for (const auto& [first, count] : pipeline::calibration_stretches(
+           source.frame_count(), options.calibration_frames, options.calibration_windows)) {
+    const MarkerSequence stretch = read_frames(source, first, count);
+    if (frames.frame_count() == 0) {
+      frames = stretch;
+      continue;
+    }
+    frames.positions.conservativeResize(Eigen::NoChange, frames.frame_count() + stretch.frame_count());
+    frames.positions.rightCols(stretch.frame_count()) = stretch.positions;
+    frames.visible.conservativeResize(Eigen::NoChange, frames.positions.cols());
+    frames.visible.rightCols(stretch.frame_count()) = stretch.visible;
+  }
+  return frames;
+}
+
+/// Leaves out of `static_trial` (blanks the labels of) the markers whose distances to the others on
+/// their segment are not the recording's (calibration::markers_moved_between_trials, `placed`: the
+/// markers placed by their motion, the others named by the set): another
+/// marker under the same label, as a capture system's numbering of unidentified points gives, or
+/// one moved between the trials. Returns the sentence that names them, "" when none.
+std::string leave_out_moved_markers(MarkerSequence& static_trial, const std::string& static_path,
+                                    const body::MarkerSet& set,
+                                    const std::vector<markerset::CompletedMarker>& placed,
+                                    FrameSource& source, const pipeline::SessionOptions& options) {
+  const body::BodyModel model = body::apply_marker_set(body::mmm_body_model(set.reference_height_mm), set);
+  const body::MarkerMapping static_mapping = body::map_marker_set(static_trial.labels, set);
+  std::vector<bool> named;  // the set's own markers, not placed by their motion
+  for (const body::Marker& marker : model.markers)
+    named.push_back(std::none_of(placed.begin(), placed.end(), [&](const markerset::CompletedMarker& m) {
+      return m.label == marker.name;
+    }));
+  const std::vector<calibration::MovedMarker> moved = calibration::markers_moved_between_trials(
+      model, static_mapping, static_trial, body::map_marker_set(source.labels(), set),
+      calibration_frames_of(source, options), named);
+  if (moved.empty()) return "";
+  std::ostringstream text;
+  text << "the static trial " << std::filesystem::path(static_path).filename().string() << " leaves out "
+       << moved.size()
+       << " marker(s) whose distances to the markers on their segment differ from the recording's "
+          "(another marker under the same label, or moved between the trials; RMS difference):";
+  for (const calibration::MovedMarker& m : moved) {
+    const auto point =
+        static_cast<std::size_t>(static_mapping.point_of_marker[static_cast<std::size_t>(m.marker)]);
+    text << " " << static_trial.labels[point] << " "
+         << (std::isfinite(m.mismatch_mm) ? std::to_string(std::lround(m.mismatch_mm)) + " mm"
+                                          : "(no pair to check)");
+    static_trial.labels[point].clear();
+    static_trial.visible.row(static_cast<Eigen::Index>(point)).setConstant(false);
+  }
+  return text.str();
+}
+
+/// Whether a segment of the static trial carries markers placed by their motion and none the set
+/// names: only the pose held then gives that segment the zero of its joint angles.
+bool shows_cluster_segment(const MarkerSequence& static_trial, const MarkerSetChoice& choice) {
+  const body::BodyModel model =
+      body::apply_marker_set(body::mmm_body_model(choice.set.reference_height_mm), choice.set);
+  std::vector<int> point_segment;
+  const body::MarkerMapping mapping = body::map_marker_set(static_trial.labels, choice.set);
+  const track::SegmentObservation segments = track::observe_segments(model, mapping, &point_segment);
+  std::vector<bool> placed(segments.segments.size(), false), named(segments.segments.size(), false);
+  for (std::size_t p = 0; p < point_segment.size() && p < static_trial.labels.size(); ++p) {
+    if (point_segment[p] < 0 || !static_trial.visible.row(static_cast<Eigen::Index>(p)).any()) continue;
+    const bool by_motion =
+        std::any_of(choice.inferred.begin(), choice.inferred.end(),
+                    [&](const markerset::CompletedMarker& m) { return m.label == static_trial.labels[p]; });
+    (by_motion ? placed : named)[static_cast<std::size_t>(point_segment[p])] = true;
+  }
+  for (std::size_t s = 0; s < placed.size(); ++s)
+    if (placed[s] && !named[s]) return true;
+  return false;
 }
 
 /// `value` as few digits as say it ("1750", "0.5").
@@ -216,17 +294,21 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
     marker_set_seconds += track::seconds_since(start);
     return choice;
   };
+  std::string static_message;  // the static trial's markers left out (leave_out_moved_markers)
   if (!request.static_trial.empty() && !request.static_alone) {
     // The static trial and the recording calibrated together (one bundle adjustment from the
     // marker set): the static frames fix the gauges, the moving ones what bending joints show.
     prepared.choice = choose_set();  // no subject beside a static trial (check_request)
     SubjectSettings settings = static_trial_settings(request);
+    options.static_trial = read_static_trial(request);
+    static_message = leave_out_moved_markers(options.static_trial, request.static_trial, prepared.choice.set,
+                                             prepared.choice.inferred, source, options);
     // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held,
-    // held exactly and tightly, as calibrate_static_trial does.
-    if (!prepared.choice.inferred.empty() && request.static_posture == "auto")
+    // held exactly and tightly, as calibrate_static_trial does; where the set's named markers ride on
+    // every segment the static trial shows, they give the zeros and the posture is estimated.
+    if (shows_cluster_segment(options.static_trial, prepared.choice) && request.static_posture == "auto")
       hold_placed_markers_posture(settings);
     apply_static_settings(settings, options.calibration);
-    options.static_trial = read_static_trial(request);
     options.calibration_may_fail = false;
     prepared.choice.source += "; calibrated together with the static trial " + request.static_trial;
   } else if (!request.static_trial.empty()) {
@@ -293,6 +375,8 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   prepared.warnings = recording.file_warnings;
   prepared.warnings.insert(prepared.warnings.end(), session.warnings.begin(), session.warnings.end());
   prepared.messages = marker_set_messages(prepared.choice, session.mapping);
+  if (!static_message.empty())
+    prepared.messages.push_back(std::filesystem::path(input).filename().string() + ": " + static_message);
   if (!stretch_message.empty())
     prepared.messages.push_back(std::filesystem::path(input).filename().string() + ": " + stretch_message);
   return prepared;
