@@ -39,9 +39,11 @@ std::optional<MarkerSetChoice> calibrate_on_static_trial(const TrackSettings& se
       fs::is_regular_file(recording) ? app::completed_set_for_static_trial(request, recording, completed_path)
                                      : std::nullopt;
   if (completed && !settings.quiet) std::cout << recording << ": marker set " << completed->source << "\n";
-  const CalibratedSubject calibrated =
-      app::calibrate_static_trial(request, cached_sample_set(46, request.samples),
-                                  fs::path(path).stem().string(), completed ? &completed->set : nullptr);
+  app::StaticTrialPlacedMarkers placed;
+  const CalibratedSubject calibrated = app::calibrate_static_trial(
+      request, cached_sample_set(46, request.samples), fs::path(path).stem().string(),
+      completed ? &*completed : nullptr, recording, &placed);
+  if (!placed.left_out.empty() && !settings.quiet) std::cout << recording << ": " << placed.left_out << "\n";
   if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
   write_subject_file(path, subject_document(calibrated, request.static_trial));
   if (settings.quiet) return completed;

@@ -20,6 +20,7 @@
 #include <chrono>
 #include <filesystem>
 #include <initializer_list>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -85,7 +86,7 @@ std::string leave_out_moved_markers(MarkerSequence& static_trial, const std::str
   text << "the static trial " << std::filesystem::path(static_path).filename().string() << " leaves out "
        << moved.size()
        << " marker(s) whose distances to the markers on their segment differ from the recording's "
-          "(another marker under the same label, or moved between the trials; RMS difference):";
+          "(another marker under the same label, or moved between the trials; by how much):";
   for (const calibration::MovedMarker& m : moved) {
     const auto point =
         static_cast<std::size_t>(static_mapping.point_of_marker[static_cast<std::size_t>(m.marker)]);
@@ -321,12 +322,14 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
             ? completed_set_for_static_trial(request, input, recording.inferred_markerset_path)
             : std::nullopt;
     marker_set_seconds += track::seconds_since(start);
+    StaticTrialPlacedMarkers placed;
     const CalibratedSubject calibrated = calibrate_static_trial(
         request, prepared.samples, std::filesystem::path(input).stem().string() + "_subject",
-        completed ? &completed->set : nullptr);
+        completed ? &*completed : nullptr, input, &placed);
+    static_message = placed.left_out;
     prepared.choice.set = calibrated.subject;
     prepared.choice.source = "calibrated on the static trial " + request.static_trial;
-    if (completed && request.static_posture == "auto")
+    if (placed.held_exactly)
       prepared.choice.source +=
           " with the posture held exactly, within " +
           number_text(std::min(request.static_sd_deg, kPlacedMarkersStaticSdDeg)) +
@@ -470,14 +473,33 @@ SubjectSettings static_trial_settings(const TrackRequest& request) {
 }
 
 CalibratedSubject calibrate_static_trial(const TrackRequest& request, const SampleSet& samples,
-                                         const std::string& name, const body::MarkerSet* set) {
+                                         const std::string& name, const MarkerSetChoice* completed,
+                                         const std::string& recording, StaticTrialPlacedMarkers* placed) {
   SubjectSettings settings = static_trial_settings(request);
-  if (set) settings.set = *set;
+  if (!completed)
+    return calibrate_subject_file(request.static_trial, option_name(request, "static"), settings, samples,
+                                  name);
+  settings.set = completed->set;
+  MarkerSequence trial = read_static_trial(request);
+  StaticTrialPlacedMarkers done;
+  if (!recording.empty()) {
+    std::unique_ptr<c3d::C3dFrameSource> source;
+    try {
+      source = std::make_unique<c3d::C3dFrameSource>(recording);
+    } catch (const std::exception& e) {
+      throw UserError(e.what());
+    }
+    done.left_out = leave_out_moved_markers(trial, request.static_trial, completed->set, completed->inferred,
+                                            *source, session_options(request, source->rate_hz()));
+  }
   // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held:
   // held exactly and tightly, or the posture trades with their offsets (docs/marker-sets.md).
-  if (set && request.static_posture == "auto") hold_placed_markers_posture(settings);
-  return calibrate_subject_file(request.static_trial, option_name(request, "static"), settings, samples,
-                                name);
+  done.held_exactly = request.static_posture == "auto" && shows_cluster_segment(trial, *completed);
+  if (done.held_exactly) hold_placed_markers_posture(settings);
+  if (placed) *placed = done;
+  SequenceFrameSource source(trial);
+  return calibrate_subject(source, option_name(request, "static") + " " + request.static_trial, settings,
+                           samples, name);
 }
 
 std::optional<MarkerSetChoice> completed_set_for_static_trial(const TrackRequest& request,

@@ -65,6 +65,20 @@ TEST(CalibrationCheck, AScaleOutsideTheLimitsNamesTheSegmentAndTheStance) {
   EXPECT_FALSE(mentions(moving, "--static-pose")) << moving;
 }
 
+// The real Plug-in Gait static trial alone: thighs 0.79 and 1.04. A static trial's sides must agree
+// within 25 %; a moving recording's calibration is not judged so (its bending joints place them).
+TEST(CalibrationCheck, AStaticTrialsTwoSidesMustBeAlike) {
+  Calibrated c = plausible();
+  c.calibration.segment_scale["LH"] = 0.79;
+  c.calibration.segment_scale["RH"] = 1.04;
+  const std::string problem = calibration::check_calibration(c.start, c.calibration, true).problem;
+  EXPECT_TRUE(mentions(problem, "segments LH and RH came out 0.79 and 1.04")) << problem;
+  EXPECT_TRUE(mentions(problem, "--static STATIC")) << problem;
+  EXPECT_TRUE(calibration::check_calibration(c.start, c.calibration, false).problem.empty());
+  c.calibration.segment_scale["LH"] = 0.95;  // 9 % apart: a person's
+  EXPECT_TRUE(calibration::check_calibration(c.start, c.calibration, true).problem.empty());
+}
+
 TEST(CalibrationCheck, AMarkerFarFromItsPlaceIsNamedAsMislabelled) {
   Calibrated c = plausible();
   const int m = c.start.marker_index("RKNE") >= 0 ? c.start.marker_index("RKNE") : 7;

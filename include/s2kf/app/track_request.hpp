@@ -171,11 +171,21 @@ MarkerSequence read_static_trial(const TrackRequest& request);
 /// The settings of the request's static trial (or static stretch): its pose, SD and posture.
 SubjectSettings static_trial_settings(const TrackRequest& request);
 
+/// What calibrate_static_trial did with the markers placed by a recording's motion.
+struct StaticTrialPlacedMarkers {
+  std::string left_out;       ///< the sentence naming those the static trial left out, "" for none
+  bool held_exactly = false;  ///< the posture held exactly (static_posture "auto", a cluster segment)
+};
+
 /// The subject calibrated on the request's static trial in the pose it names (or the one found
-/// from the data), as `s2kf calibrate --static`, named `name`, with every core; with `set`
-/// (completed_set_for_static_trial) instead of the request's or the best bundled one where given.
+/// from the data), as `s2kf calibrate --static`, named `name`, with every core; with `completed`
+/// (completed_set_for_static_trial on the C3D file `recording`) instead of the request's or the
+/// best bundled set where given: the static trial then leaves out the placed markers its
+/// distances do not confirm (as the joint calibration does), and `placed` (optional) says what was done.
 CalibratedSubject calibrate_static_trial(const TrackRequest& request, const SampleSet& samples,
-                                         const std::string& name, const body::MarkerSet* set = nullptr);
+                                         const std::string& name, const MarkerSetChoice* completed = nullptr,
+                                         const std::string& recording = "",
+                                         StaticTrialPlacedMarkers* placed = nullptr);
 
 /// With a static trial: when the C3D file at `recording_path`, tracked with it, has markers the
 /// chosen set does not name (a cluster model), that set completed by their motion in the recording

@@ -36,6 +36,12 @@ struct CalibrationLimits {
   /// The adjusted poses' RMS marker distance (mm) above which the fit explains nothing (the real
   /// 85_02 recording's first 150 frames end at 40 mm and still make a usable subject).
   double max_rms_mm = 60;
+  /// A static trial's left and right bone-length factors of one segment (LH and RH, ...) differing
+  /// by more than this ratio: a person's sides differ by a few percent, and straight limbs show a
+  /// joint's place along them only through the markers next to it (the real Plug-in Gait static
+  /// trial alone: thighs 0.80 and 1.04, shanks 1.21 and 0.89; with its moving trial 1.08 and 1.08,
+  /// 1.05 and 0.96).
+  double max_side_ratio = 1.25;
 };
 
 /// What the check measured: the worst of each kind, to report beside the verdict.

@@ -39,6 +39,22 @@ S2KF_INLINE CalibrationCheck check_calibration(const body::BodyModel& start,
                       detail::number_text(limits.min_scale, 1) + " and " +
                       detail::number_text(limits.max_scale, 1) + ")";
   }
+  // A static trial's two sides of one segment: as long as each other, within a person's asymmetry.
+  std::string side_problem;
+  for (const auto& [left, left_factor] : calibration.segment_scale) {
+    if (!static_trial || !side_problem.empty() || left.size() < 2 || left[0] != 'L') continue;
+    const auto right = calibration.segment_scale.find("R" + left.substr(1));
+    if (right == calibration.segment_scale.end() || !(left_factor > 0 && right->second > 0)) continue;
+    if (std::max(left_factor, right->second) / std::min(left_factor, right->second) > limits.max_side_ratio)
+      side_problem = "the bone-length factors of segments " + left + " and " + right->first + " came out " +
+                     detail::number_text(left_factor, 2) + " and " + detail::number_text(right->second, 2) +
+                     " (a person's two sides differ by less than " +
+                     detail::number_text(100 * (limits.max_side_ratio - 1), 0) +
+                     " %); likely cause: the limbs were straight, and a static trial shows where a joint "
+                     "lies along a straight limb only through the markers next to it (calibrate it together "
+                     "with a moving trial: s2kf track MOVING --static STATIC), or a mislabelled marker on "
+                     "or next to them";
+  }
   // Offsets against the marker set's placement, and each marker's residual.
   int far_markers = 0;
   const std::size_t markers = std::min(start.markers.size(), calibration.model.markers.size());
@@ -66,6 +82,8 @@ S2KF_INLINE CalibrationCheck check_calibration(const body::BodyModel& start,
   };
   if (!scale_problem.empty()) {
     check.problem = "the calibrated subject is not a person's: " + scale_problem + "; " + causes;
+  } else if (!side_problem.empty()) {
+    check.problem = "the calibrated subject is not a person's: " + side_problem;
   } else if (far_markers > 0) {
     const std::string marker = check.worst_offset_marker;
     check.problem =

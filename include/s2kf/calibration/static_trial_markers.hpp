@@ -24,7 +24,8 @@ namespace s2kf::calibration {
 /// A static trial's marker whose distances to its segment's markers are not the recording's.
 struct MovedMarker {
   int marker = -1;  ///< model marker
-  /// RMS over its pairs on its frame of |static trial's - recording's distance|; NaN: no pair to judge it by
+  /// |static trial's - recording's distance| over its pairs on its frame (the median against named
+  /// markers, else the RMS); NaN: no pair to judge it by
   double mismatch_mm = 0;
 };
 
@@ -32,7 +33,7 @@ struct MovedMarker {
 /// trial) that both trials show and whose label the distances to the other markers on the same
 /// model frame do not confirm (each distance the median over the frames showing both markers; they
 /// agree within `tolerance_mm`). A marker with two or more named markers on its frame is judged
-/// against them (RMS); the others against every marker on their frame, the one at odds with the
+/// against them (the median); the others against every marker on their frame, the one at odds with the
 /// most left out first and the rest judged again without it; one of those is confirmed only by two
 /// markers that agree with it (a single distance matches by chance too often), else left out with
 /// its RMS, or NaN without any pair to judge it by. 30 mm: soft tissue and another posture change a

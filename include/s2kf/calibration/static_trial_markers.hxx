@@ -34,6 +34,9 @@ S2KF_INLINE std::vector<MovedMarker> markers_moved_between_trials(
     const int p = m < mapping.point_of_marker.size() ? mapping.point_of_marker[m] : -1;
     return p < frames.point_count() ? p : -1;
   };
+  const auto shown = [](int p, const MarkerSequence& frames) {
+    return p >= 0 && frames.visible.row(p).any();
+  };
   const auto is_named = [&](int m) {
     return static_cast<std::size_t>(m) < named.size() && named[static_cast<std::size_t>(m)];
   };
@@ -59,12 +62,12 @@ S2KF_INLINE std::vector<MovedMarker> markers_moved_between_trials(
   // Per marker over its pairs with markers still in: count, disagreeing count, sum of squares.
   std::vector<int> pairs, disagreeing;
   std::vector<double> sum;
-  const auto tally = [&](bool named_partners_only) {
+  const auto tally = [&]() {
     pairs.assign(out.size(), 0);
     disagreeing.assign(out.size(), 0);
     sum.assign(out.size(), 0.0);
     for (const auto& [pair, e] : mismatch) {
-      if (!active(pair) || (named_partners_only && is_named(pair.first) == is_named(pair.second))) continue;
+      if (!active(pair)) continue;
       for (const int m : {pair.first, pair.second}) {
         const auto i = static_cast<std::size_t>(m);
         if (is_named(m)) continue;
@@ -79,16 +82,22 @@ S2KF_INLINE std::vector<MovedMarker> markers_moved_between_trials(
     out[m] = true;
     moved.push_back({static_cast<int>(m), mismatch_mm});
   };
-  // A marker with two or more named markers on its frame: judged against them alone.
-  tally(true);
-  for (std::size_t m = 0; m < out.size(); ++m)
-    if (pairs[m] >= 2) {
-      judged[m] = true;
-      if (rms(m) > tolerance_mm) leave_out(m, rms(m));
-    }
+  // A marker with two or more named markers on its frame: judged against them alone, by the median
+  // (one of them moved does not condemn it).
+  std::vector<std::vector<double>> to_named(out.size());
+  for (const auto& [pair, e] : mismatch)
+    if (is_named(pair.first) != is_named(pair.second))
+      to_named[static_cast<std::size_t>(is_named(pair.first) ? pair.second : pair.first)].push_back(e);
+  for (std::size_t m = 0; m < out.size(); ++m) {
+    std::vector<double>& e = to_named[m];
+    if (e.size() < 2) continue;
+    judged[m] = true;
+    std::sort(e.begin(), e.end());
+    if (const double median = e[(e.size() - 1) / 2]; median > tolerance_mm) leave_out(m, median);
+  }
   // The others against every marker on their frame: the one at odds with the most out first.
   for (;;) {
-    tally(false);
+    tally();
     std::size_t worst = out.size();
     for (std::size_t m = 0; m < out.size(); ++m)
       if (!judged[m] && disagreeing[m] > 0 &&
@@ -101,11 +110,12 @@ S2KF_INLINE std::vector<MovedMarker> markers_moved_between_trials(
   // Confirmed only by two markers that agree: one distance matches by chance too often.
   for (bool changed = true; changed;) {
     changed = false;
-    tally(false);
+    tally();
     for (int m = 0; m < model.marker_count(); ++m) {
       const auto i = static_cast<std::size_t>(m);
       if (is_named(m) || out[i] || judged[i] || pairs[i] - disagreeing[i] >= 2 ||
-          point(static_mapping, static_trial, m) < 0 || point(recording_mapping, recording, m) < 0)
+          !shown(point(static_mapping, static_trial, m), static_trial) ||
+          !shown(point(recording_mapping, recording, m), recording))
         continue;
       leave_out(i, pairs[i] > 0 ? rms(i) : std::numeric_limits<double>::quiet_NaN());
       changed = true;
