@@ -178,8 +178,8 @@ const RegisterCommand track_registration{
       app.add_option("--static-posture", settings->request.static_posture,
                      "near (the posture held is estimated within --static-sd of the reference pose), "
                      "exact (every frame within --static-sd of it) or auto (exact, within 0.5 degrees or "
-                     "--static-sd if less, and the pelvis upright within as much, where markers the set "
-                     "does not name were placed by their motion, else near)")
+                     "--static-sd if less, and the pelvis upright within as much, where a segment of the "
+                     "static trial carries only markers placed by their motion, else near)")
           ->check(CLI::IsMember({"auto", "near", "exact"}));
       // Deprecated (what --static does now): hidden, and run_track says what replaced it.
       app.add_flag("--static-refine", settings->request.static_refine)->group("");

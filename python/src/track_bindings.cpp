@@ -401,7 +401,7 @@ void bind_track(py::module_& module) {
       "'zero', 't-pose', 'a-pose' or a pose CSV, default: the nearest one; static_sd: each joint's SD "
       "from it, degrees; static_posture: 'near', the posture held estimated near the pose, 'exact', or "
       "'auto' (exact, the pelvis "
-      "upright, where markers were placed by their motion, else near); "
+      "upright, where a segment carries only markers placed by their motion, else near); "
       "static_refine: deprecated, what static does now); static_stretch: without "
       "static, a stretch of the recording where the subject stands still in a reference pose is its "
       "static trial; calibrate: fit the subject's "

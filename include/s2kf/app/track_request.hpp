@@ -47,8 +47,9 @@ struct TrackRequest {
   std::string static_pose;
   /// "near": the posture held is estimated within static_sd_deg of the reference pose; "exact":
   /// every frame's angles within static_sd_deg of it; "auto": exact, within
-  /// kPlacedMarkersStaticSdDeg and the pelvis upright within as much, where markers the set does not name
-  /// were placed by their motion (a cluster's zero comes from the pose held alone), else near.
+  /// kPlacedMarkersStaticSdDeg and the pelvis upright within as much, where a segment of the static
+  /// trial carries only markers placed by their motion (a cluster's zero comes from the pose held
+  /// alone), else near.
   std::string static_posture = "auto";
   /// With a static trial: calibrate the subject on the static trial alone and track with it as with
   /// a subject file, instead of calibrating the static trial and the recording together (one
