@@ -136,21 +136,11 @@ std::string static_posture_text(const CalibratedSubject& calibrated, const Subje
   const Eigen::VectorXd off = (calibration.static_posture - reference) * kDegreesPerRadian;
   Eigen::Index worst = 0;
   off.cwiseAbs().maxCoeff(&worst);
-  // Found from the data, a joint held far from the pose is estimated near the posture tracked there
-  // (calibration's choose_static_pose); named, the pose is the user's word.
-  std::string far;
-  if (calibration.static_pose_choice >= 0)
-    for (Eigen::Index j = 0; j < off.size(); ++j)
-      if (std::abs(off(j)) > 25)
-        far += (far.empty() ? "" : " ") + calibration.model.joints[static_cast<std::size_t>(j)].name;
   return pose + ", posture held " +
          fixed_text(std::sqrt(off.squaredNorm() / static_cast<double>(off.size())), 1) +
          " deg RMS from it (most " + calibration.model.joints[static_cast<std::size_t>(worst)].name + ", " +
          fixed_text(off(worst), 1) + " deg" +
-         (!far.empty() ? "; held near the posture tracked instead, beyond 25 deg from it: " + far
-          : std::abs(off(worst)) > 25 ? "; far from it: was that the pose held?"
-                                      : "") +
-         ")";
+         (std::abs(off(worst)) > 25 ? "; far from it: was that the pose held?" : "") + ")";
 }
 
 void write_subject_file(const std::string& path, const nlohmann::json& document) {

@@ -150,10 +150,6 @@ inline std::vector<BundleFrame> static_trial_frames(const std::vector<BundleFram
 /// The static trial's reference pose: options.static_pose (the zero pose when empty), or of the
 /// candidates the one nearest (RMS over the joints) the tracked frames' mean posture; `choice` is
 /// its index, -1 for static_pose.
-/// A joint farther than this from the nearest named reference pose was not held in it (25 deg: the
-/// static stretch's test of a reference pose, calibration/static_stretch.hpp's caller).
-inline constexpr double kFarFromReferencePoseRad = 25.0 * kPi / 180.0;
-
 inline Eigen::VectorXd choose_static_pose(const CalibrationOptions& options,
                                           const std::vector<BundleFrame>& frames, Eigen::Index joint_count,
                                           int& choice) {
@@ -173,12 +169,7 @@ inline Eigen::VectorXd choose_static_pose(const CalibrationOptions& options,
     const double distance = (candidate - posture).squaredNorm();
     if (distance < best) best = distance, choice = static_cast<int>(c);
   }
-  // A joint held far from the nearest named pose (arms forward with the elbows bent) keeps the
-  // posture tracked there as its reference: the named pose is wrong for it, not near.
-  Eigen::VectorXd reference = options.static_pose_candidates[static_cast<std::size_t>(choice)];
-  for (Eigen::Index j = 0; j < joint_count; ++j)
-    if (std::abs(posture(j) - reference(j)) > kFarFromReferencePoseRad) reference(j) = posture(j);
-  return reference;
+  return options.static_pose_candidates[static_cast<std::size_t>(choice)];
 }
 
 /// Tracks all frames; returns the poses of the frames usable for calibration and the pass's mean
