@@ -48,6 +48,7 @@ CalibratedSubject calibrate_subject(FrameSource& source, const std::string& inpu
   options.calibration.estimate_segment_scales = !settings.no_scales;
   options.calibration.weak_direction_shrink = settings.shrink;
   options.noise_from_calibration = settings.noise_from_calibration;
+  options.subject_limits.max_side_ratio = settings.max_side_ratio;
   if (settings.static_pose) apply_static_settings(settings, options.calibration);
   try {
     result.session = pipeline::prepare_session(source, result.choice.set, options, samples);

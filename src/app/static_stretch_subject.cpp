@@ -10,6 +10,7 @@
 #include <s2kf/core/constants.hpp>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace s2kf::app {

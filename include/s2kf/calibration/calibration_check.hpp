@@ -39,8 +39,8 @@ struct CalibrationLimits {
   /// A static trial's left and right bone-length factors of one segment (LH and RH, ...) differing
   /// by more than this ratio: a person's sides differ by a few percent, and straight limbs show a
   /// joint's place along them only through the markers next to it (the real Plug-in Gait static
-  /// trial alone: thighs 0.79 and 1.04, shanks 1.20 and 0.89; with its moving trial 1.09 and 1.08,
-  /// 1.06 and 0.96).
+  /// trial alone: thighs 0.79 and 1.04, shanks 1.20 and 0.89; with its moving trial 1.08 and 1.08,
+  /// 1.05 and 0.96).
   double max_side_ratio = 1.25;
 };
 

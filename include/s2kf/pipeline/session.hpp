@@ -14,6 +14,7 @@
 #include <s2kf/body/body_model.hpp>
 #include <s2kf/body/marker_set.hpp>
 #include <s2kf/body/marker_set_mapping.hpp>
+#include <s2kf/calibration/calibration_check.hpp>
 #include <s2kf/calibration/height_estimate.hpp>
 #include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/core/compilation_mode.hpp>
@@ -84,6 +85,8 @@ struct SessionOptions {
   /// A calibration that cannot be done (too few usable frames) leaves the marker set as it is with
   /// a warning (true), or is an error (false: `s2kf calibrate`).
   bool calibration_may_fail = true;
+  /// What the calibrated subject may be (calibration::check_calibration).
+  calibration::CalibrationLimits subject_limits;
   /// A static trial of the same subject (its frames and labels; calibration.static_pose_sd_rad > 0
   /// and the pose settings in `calibration`): calibrated together with the recording's stretches,
   /// in one bundle adjustment (CalibrationOptions::static_frames). Empty (no frame): none.

@@ -5,8 +5,6 @@
 
 #include <s2kf/pipeline/session.hpp>
 
-#include <s2kf/calibration/calibration_check.hpp>
-
 namespace s2kf::pipeline {
 S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& set,
                                     const SessionOptions& options, const SampleSet& samples) {
@@ -131,7 +129,7 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
       session.times.calibration = track::seconds_since(start);
       // Never a broken subject: one that no person could be is refused here (calibration_check.hpp).
       const calibration::CalibrationCheck check = calibration::check_calibration(
-          session.model, *session.calibration, calibration.static_pose_sd_rad > 0);
+          session.model, *session.calibration, calibration.static_pose_sd_rad > 0, options.subject_limits);
       if (!check.problem.empty()) throw std::invalid_argument(check.problem);
       session.model = session.calibration->model;
       if (options.noise_from_calibration)
