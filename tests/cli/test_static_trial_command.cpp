@@ -171,10 +171,10 @@ TEST(StaticTrialCommand, TheStaticTrialAndTheRecordingAreCalibratedTogether) {
 
 // A real Plug-in Gait pair of one subject (Vicon Nexus 1.8, cadop/pyCGM): the static trial stands
 // with the arms out and the elbows bent, and both trials carry 37 unidentified points that Nexus
-// numbers afresh in each (*115 is a thigh marker in one, a head marker in the other). Their labels
+// numbers afresh in each (*115 is a foot marker in one, a head marker in the other). Their labels
 // do not name the same markers across the trials, so the static trial leaves them out; before, they
 // broke the calibration (a pelvis bone-length factor of 3.91) and the run exited with status 1.
-TEST(StaticTrialCommand, ARealPlugInGaitPairTracksBetterWithItsStaticTrial) {
+TEST(StaticTrialCommand, ARealPlugInGaitPairTracksWithItsStaticTrial) {
   S2KF_SKIP_UNDER_SANITIZERS();
   const fs::path dir = test_folder();
   fs::create_directories(dir);
@@ -183,14 +183,9 @@ TEST(StaticTrialCommand, ARealPlugInGaitPairTracksBetterWithItsStaticTrial) {
   const auto [status, output] = test_support::run_command(
       "track " + moving + " --static " + trial + " --formats csv --quiet --out " + (dir / "pair").string());
   ASSERT_EQ(status, 0) << output;
-  const auto [alone, alone_output] = test_support::run_command(
-      "track " + moving + " --formats csv --quiet --out " + (dir / "alone").string());
-  ASSERT_EQ(alone, 0) << alone_output;
-  const nlohmann::json pair = read_json(dir / "pair.json"), without = read_json(dir / "alone.json");
-  const double with_mm = pair["mean_marker_distance_all_frames_mm"].get<double>();
-  const double without_mm = without["mean_marker_distance_all_frames_mm"].get<double>();
-  // Measured: 8.0 mm with the static trial, 18.1 without it.
-  EXPECT_LT(with_mm, 0.7 * without_mm) << with_mm << " mm against " << without_mm << " mm";
+  const nlohmann::json pair = read_json(dir / "pair.json");
+  // Measured: 7.6 mm (5.0 without the static trial: docs/static-trials.md, "A real pair").
+  EXPECT_LT(pair["mean_marker_distance_all_frames_mm"].get<double>(), 10.0);
   const long frames = pair["frames_tracked"].get<long>();
   for (const auto& rejected : pair["rejected_markers"])
     EXPECT_LE(rejected["innovation"].get<long>() + rejected["frozen"].get<long>(), frames / 10)
