@@ -171,8 +171,8 @@ TEST(StaticTrialCommand, TheStaticTrialAndTheRecordingAreCalibratedTogether) {
 
 // A real Plug-in Gait pair of one subject (Vicon Nexus 1.8, cadop/pyCGM): the static trial stands
 // with the arms out and the elbows bent, and both trials carry 37 unidentified points that Nexus
-// numbers afresh in each (*115 is a foot marker in one, a head marker in the other). Their labels
-// do not name the same markers across the trials, so the static trial leaves them out; before, they
+// numbers afresh in each (*115, a head marker in the walk, is another marker in the static trial). Their
+// labels do not name the same markers across the trials, so the static trial leaves them out; before, they
 // broke the calibration (a pelvis bone-length factor of 3.91) and the run exited with status 1.
 TEST(StaticTrialCommand, ARealPlugInGaitPairTracksWithItsStaticTrial) {
   S2KF_SKIP_UNDER_SANITIZERS();
