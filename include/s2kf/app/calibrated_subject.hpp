@@ -45,6 +45,9 @@ struct SubjectSettings {
   /// Track the recording once more with the calibrated subject for its mean marker distance after
   /// calibration; false where nobody reads it (a still stretch tried as a static trial).
   bool final_pass = true;
+  /// A static trial's left and right bone-length factors may differ by at most this ratio
+  /// (calibration::CalibrationLimits::max_side_ratio).
+  double max_side_ratio = calibration::CalibrationLimits{}.max_side_ratio;
 };
 
 struct CalibratedSubject {
