@@ -87,6 +87,7 @@
 #include <s2kf/calibration/calibration_check.hpp>
 #include <s2kf/calibration/height_estimate.hpp>
 #include <s2kf/calibration/static_stretch.hpp>
+#include <s2kf/calibration/static_trial_markers.hpp>
 #include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/calibration/subject_information.hpp>
 
