@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The same command gives the same numbers: `s2kf track` on the bundled recordings against the
-motion files it wrote before the house was reorganised (tests/data/golden/, commit 64422a8).
+motion files of tests/data/golden/ (written before the house was reorganised, commit 64422a8;
+again when the bundle adjustment's relative tolerance became 1e-3, its accuracy measured).
 Usage: same_numbers.py S2KF_PROGRAM REPOSITORY SCRATCH_DIR. Exits 1 naming the first difference.
 
 Tolerances: 1e-4 rad (0.006 degrees) for angles and 0.01 mm for the root position, far below what

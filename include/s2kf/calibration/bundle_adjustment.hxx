@@ -360,9 +360,8 @@ class BundleAdjustment {
           frames = std::move(trial_frames);
           cumulative_ = std::move(trial_cumulative);
           current = trial;
-          // Lowered only after a step the first damping tried gave: after a refusal the lower
-          // damping has just failed at this linearisation, and trying it first again at the next
-          // one mostly fails too (a Levenberg-Marquardt crawl at a steady damping solved twice).
+          // Lowered after every accepted step: keeping it after a refusal spares a quarter of the
+          // steps but led HDM05's adjustment to a subject the plausibility check refuses.
           damping = std::max(damping / 10, 1e-9);
           if (decrease <= options_.relative_tolerance * current) it = options_.bundle_iterations;
         } else {
