@@ -48,17 +48,8 @@ void hold_placed_markers_posture(SubjectSettings& settings) {
 MarkerSequence calibration_frames_of(FrameSource& source, const pipeline::SessionOptions& options) {
   MarkerSequence frames;
   for (const auto& [first, count] : pipeline::calibration_stretches(
-           source.frame_count(), options.calibration_frames, options.calibration_windows)) {
-    const MarkerSequence stretch = read_frames(source, first, count);
-    if (frames.frame_count() == 0) {
-      frames = stretch;
-      continue;
-    }
-    frames.positions.conservativeResize(Eigen::NoChange, frames.frame_count() + stretch.frame_count());
-    frames.positions.rightCols(stretch.frame_count()) = stretch.positions;
-    frames.visible.conservativeResize(Eigen::NoChange, frames.positions.cols());
-    frames.visible.rightCols(stretch.frame_count()) = stretch.visible;
-  }
+           source.frame_count(), options.calibration_frames, options.calibration_windows))
+    frames.append_frames(read_frames(source, first, count));
   return frames;
 }
 

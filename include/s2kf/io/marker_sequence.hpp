@@ -77,6 +77,19 @@ struct MarkerSequence {
     part.visible = visible.middleCols(first, count);
     return part;
   }
+  /// The frames of `more` (the same points) appended after these; an empty sequence becomes `more`.
+  void append_frames(const MarkerSequence& more) {
+    if (frame_count() == 0) {
+      *this = more;
+      return;
+    }
+    if (more.point_count() != point_count())
+      throw std::invalid_argument("MarkerSequence::append_frames: both sequences must have the same points");
+    positions.conservativeResize(Eigen::NoChange, frame_count() + more.frame_count());
+    positions.rightCols(more.frame_count()) = more.positions;
+    visible.conservativeResize(Eigen::NoChange, positions.cols());
+    visible.rightCols(more.frame_count()) = more.visible;
+  }
 };
 
 }  // namespace s2kf

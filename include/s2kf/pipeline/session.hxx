@@ -110,16 +110,9 @@ S2KF_INLINE Session prepare_session(FrameSource& source, const body::MarkerSet& 
             source.rate_hz();  // tracked as the recording's (a still subject: the rate barely matters)
       }
       for (const auto& [first, count] : session.calibration_stretches) {
-        const MarkerSequence stretch = read_frames(timed, first, count);
-        if (frames.frame_count() == 0) {
-          frames = stretch;
-          continue;
-        }
-        calibration.restart_frames.push_back(static_cast<long>(frames.frame_count()));
-        frames.positions.conservativeResize(Eigen::NoChange, frames.frame_count() + stretch.frame_count());
-        frames.positions.rightCols(stretch.frame_count()) = stretch.positions;
-        frames.visible.conservativeResize(Eigen::NoChange, frames.positions.cols());
-        frames.visible.rightCols(stretch.frame_count()) = stretch.visible;
+        if (frames.frame_count() > 0)
+          calibration.restart_frames.push_back(static_cast<long>(frames.frame_count()));
+        frames.append_frames(read_frames(timed, first, count));
       }
       session.calibration_frames = frames.frame_count();
       session.calibration_sample_count = calibration_samples.count();
