@@ -53,6 +53,12 @@ MarkerSequence calibration_frames_of(FrameSource& source, const pipeline::Sessio
   return frames;
 }
 
+/// Whether the marker labelled `label` was placed by its motion in the recording (not named by the set).
+bool placed_by_motion(const std::vector<markerset::CompletedMarker>& placed, const std::string& label) {
+  return std::any_of(placed.begin(), placed.end(),
+                     [&](const markerset::CompletedMarker& m) { return m.label == label; });
+}
+
 /// Leaves out of `static_trial` (blanks the labels of) the markers whose distances to the others on
 /// their segment are not the recording's (calibration::markers_moved_between_trials, `placed`: the
 /// markers placed by their motion, the others named by the set): another
@@ -65,10 +71,7 @@ std::string leave_out_moved_markers(MarkerSequence& static_trial, const std::str
   const body::BodyModel model = body::apply_marker_set(body::mmm_body_model(set.reference_height_mm), set);
   const body::MarkerMapping static_mapping = body::map_marker_set(static_trial.labels, set);
   std::vector<bool> named;  // the set's own markers, not placed by their motion
-  for (const body::Marker& marker : model.markers)
-    named.push_back(std::none_of(placed.begin(), placed.end(), [&](const markerset::CompletedMarker& m) {
-      return m.label == marker.name;
-    }));
+  for (const body::Marker& marker : model.markers) named.push_back(!placed_by_motion(placed, marker.name));
   const std::vector<calibration::MovedMarker> moved = calibration::markers_moved_between_trials(
       model, static_mapping, static_trial, body::map_marker_set(source.labels(), set),
       calibration_frames_of(source, options), named);
@@ -101,10 +104,9 @@ bool shows_cluster_segment(const MarkerSequence& static_trial, const MarkerSetCh
   std::vector<bool> placed(segments.segments.size(), false), named(segments.segments.size(), false);
   for (std::size_t p = 0; p < point_segment.size() && p < static_trial.labels.size(); ++p) {
     if (point_segment[p] < 0 || !static_trial.visible.row(static_cast<Eigen::Index>(p)).any()) continue;
-    const bool by_motion =
-        std::any_of(choice.inferred.begin(), choice.inferred.end(),
-                    [&](const markerset::CompletedMarker& m) { return m.label == static_trial.labels[p]; });
-    (by_motion ? placed : named)[static_cast<std::size_t>(point_segment[p])] = true;
+    (placed_by_motion(choice.inferred, static_trial.labels[p])
+         ? placed
+         : named)[static_cast<std::size_t>(point_segment[p])] = true;
   }
   for (std::size_t s = 0; s < placed.size(); ++s)
     if (placed[s] && !named[s]) return true;

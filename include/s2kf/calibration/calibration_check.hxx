@@ -42,10 +42,11 @@ S2KF_INLINE CalibrationCheck check_calibration(const body::BodyModel& start,
   // A static trial's two sides of one segment: as long as each other, within a person's asymmetry.
   std::string side_problem;
   for (const auto& [left, left_factor] : calibration.segment_scale) {
-    if (!static_trial || !side_problem.empty() || left.size() < 2 || left[0] != 'L') continue;
+    if (!static_trial) break;
+    if (left.size() < 2 || left[0] != 'L') continue;
     const auto right = calibration.segment_scale.find("R" + left.substr(1));
     if (right == calibration.segment_scale.end() || !(left_factor > 0 && right->second > 0)) continue;
-    if (std::max(left_factor, right->second) / std::min(left_factor, right->second) > limits.max_side_ratio)
+    if (std::max(left_factor, right->second) / std::min(left_factor, right->second) > limits.max_side_ratio) {
       side_problem = "the bone-length factors of segments " + left + " and " + right->first + " came out " +
                      detail::number_text(left_factor, 2) + " and " + detail::number_text(right->second, 2) +
                      " (a person's two sides differ by less than " +
@@ -54,6 +55,8 @@ S2KF_INLINE CalibrationCheck check_calibration(const body::BodyModel& start,
                      "lies along a straight limb only through the markers next to it (calibrate it together "
                      "with a moving trial: s2kf track MOVING --static STATIC), or a mislabelled marker on "
                      "or next to them";
+      break;  // the first pair, in the segments' order
+    }
   }
   // Offsets against the marker set's placement, and each marker's residual.
   int far_markers = 0;
