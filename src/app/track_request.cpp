@@ -292,9 +292,11 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
   if (!request.static_trial.empty() && !request.static_alone) {
     // The static trial and the recording calibrated together (one bundle adjustment from the
     // marker set): the static frames fix the gauges, the moving ones what bending joints show.
+    // The static trial read first: one that cannot be read stops the run before the inferred
+    // marker set's file is written.
+    options.static_trial = read_static_trial(request);
     prepared.choice = choose_set();  // no subject beside a static trial (check_request)
     SubjectSettings settings = static_trial_settings(request);
-    options.static_trial = read_static_trial(request);
     static_message = leave_out_moved_markers(options.static_trial, request.static_trial, prepared.choice.set,
                                              prepared.choice.inferred, source, options);
     // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held,

@@ -209,6 +209,22 @@ TEST(StaticTrialCommand, ARealPlugInGaitPairTracksWithItsStaticTrial) {
   EXPECT_FALSE(fs::exists(dir / "static.json"));
 }
 
+// A static trial that is no C3D file stops the run in one sentence naming it, before any output
+// (the marker set inferred for the recording's unnamed markers included).
+TEST(StaticTrialCommand, AnUnreadableStaticTrialWritesNothing) {
+  const fs::path dir = test_folder();
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string moving = std::string(S2KF_C3D_DATA_DIR) + "/PiG_Movement_trial.c3d";
+  const std::string empty = std::string(S2KF_C3D_DATA_DIR) + "/Empty.c3d";
+  const auto [status, output] = test_support::run_command("track " + moving + " --static " + empty +
+                                                          " --quiet --out " + (dir / "run").string());
+  EXPECT_EQ(status, 1) << output;
+  EXPECT_NE(output.find("--static: Empty.c3d: not a C3D file: the file is empty"), std::string::npos)
+      << output;
+  EXPECT_TRUE(fs::is_empty(dir)) << fs::directory_iterator(dir)->path();
+}
+
 TEST(StaticTrialCommand, AnUnknownPoseIsRefusedByName) {
   const fs::path dir = fs::path(s2kf::test_support::tmp_dir()) / "static_pose_unknown";
   fs::create_directories(dir);
