@@ -445,17 +445,27 @@ nlohmann::json summarize_track(const PreparedTrack& prepared, const track::Track
   return summary;
 }
 
-MarkerSequence read_static_trial(const TrackRequest& request) {
+std::unique_ptr<c3d::C3dFrameSource> open_static_trial(const TrackRequest& request) {
   const std::string what = option_name(request, "static");
+  std::unique_ptr<c3d::C3dFrameSource> source;
   try {
-    c3d::C3dFrameSource source(request.static_trial);
-    if (source.frame_count() == 0)
-      throw UserError(what + ": " + request.static_trial + " holds no complete frame");
-    return read_frames(source, 0, std::min<std::int64_t>(source.frame_count(), kStaticTrialMaxFrames));
+    source = std::make_unique<c3d::C3dFrameSource>(request.static_trial);
+  } catch (const std::exception& e) {
+    throw UserError(what + ": " + e.what());
+  }
+  if (source->frame_count() == 0)
+    throw UserError(what + ": " + request.static_trial + " holds no complete frame");
+  return source;
+}
+
+MarkerSequence read_static_trial(const TrackRequest& request) {
+  const std::unique_ptr<c3d::C3dFrameSource> source = open_static_trial(request);
+  try {
+    return read_frames(*source, 0, std::min<std::int64_t>(source->frame_count(), kStaticTrialMaxFrames));
   } catch (const UserError&) {
     throw;
   } catch (const std::exception& e) {
-    throw UserError(what + ": " + e.what());
+    throw UserError(option_name(request, "static") + ": " + e.what());
   }
 }
 
@@ -500,6 +510,8 @@ CalibratedSubject calibrate_static_trial(const TrackRequest& request, const Samp
 std::optional<MarkerSetChoice> completed_set_for_static_trial(const TrackRequest& request,
                                                               const std::string& recording_path,
                                                               const std::string& completed_path) {
+  // A static trial that cannot be read stops the run before the completed set's file is written.
+  open_static_trial(request);
   std::vector<std::string> labels;
   try {
     labels = c3d::C3dFrameSource(recording_path).labels();

@@ -10,6 +10,7 @@
 
 #include <s2kf/calibration/subject_calibration.hpp>
 #include <s2kf/core/sample_set.hpp>
+#include <s2kf/io/c3d_frame_source.hpp>
 #include <s2kf/io/frame_source.hpp>
 #include <s2kf/io/motion_files.hpp>
 #include <s2kf/pipeline/session.hpp>
@@ -18,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -165,6 +167,10 @@ nlohmann::json summarize_track(const PreparedTrack& prepared, const track::Track
 /// The frames of a static trial read at most (a static calibration uses as many; 20 s at 60 Hz).
 inline constexpr std::int64_t kStaticTrialMaxFrames = 1200;
 
+/// The request's static trial opened (its header and parameters read, no frame); a UserError
+/// naming the option when the file cannot be read or holds no frame.
+std::unique_ptr<c3d::C3dFrameSource> open_static_trial(const TrackRequest& request);
+
 /// The request's static trial read into memory (its first kStaticTrialMaxFrames frames); a
 /// UserError naming the option when the file cannot be read or holds no frame.
 MarkerSequence read_static_trial(const TrackRequest& request);
@@ -191,7 +197,8 @@ CalibratedSubject calibrate_static_trial(const TrackRequest& request, const Samp
 /// With a static trial: when the C3D file at `recording_path`, tracked with it, has markers the
 /// chosen set does not name (a cluster model), that set completed by their motion in the recording
 /// (a static trial shows no motion to place them by) and written to `completed_path` (unless
-/// empty), to calibrate the static trial with; nothing when there is nothing to place.
+/// empty), to calibrate the static trial with; nothing when there is nothing to place. A UserError,
+/// and no file, when the static trial cannot be read.
 std::optional<MarkerSetChoice> completed_set_for_static_trial(const TrackRequest& request,
                                                               const std::string& recording_path,
                                                               const std::string& completed_path);
