@@ -854,8 +854,10 @@ inline std::string choose_cluster_segment(const ClusterCandidates& candidates, d
 }
 
 /// Places each cluster as a unit (clusters: label_clusters) on the segment choose_cluster_segment
-/// gives, each marker on that segment's frame that carries it steadiest; `place(i, frame)` sets
-/// its offset. Returns the markers moved; `notes` (by stem) holds each cluster's note, if any.
+/// gives, all its markers on that segment's own frame (after every DoF of its joint): a rigid plate
+/// rides on one bone, and members left on the joint's intermediate frames would not see the angles
+/// after them (a foot plate's markers on LAx do not see the inversion). `place(i, frame)` sets its
+/// offset. Returns the markers moved; `notes` (by stem) holds each cluster's note, if any.
 template <class Place>
 int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::vector<MarkerCluster>& clusters,
                             const Place& place, std::map<std::string, std::string>& notes) {
@@ -869,9 +871,9 @@ int place_clusters_as_units(const InferenceContext& c, Attempt& a, const std::ve
     else
       notes[cluster.stem] = note.str();
     if (chosen.empty()) continue;
+    const int frame = c.base.frame_index(chosen);
     for (std::size_t i : cluster.members) {
-      if (body::segment_of_frame(c.base, a.frame_of[i]) == chosen) continue;
-      const int frame = steadiest_frame_on(c, a, i, chosen);
+      if (a.frame_of[i] == frame) continue;
       a.frame_of[i] = frame;
       place(i, frame);
       ++moved;
@@ -949,8 +951,8 @@ int split_clusters_sharing_a_segment(const InferenceContext& c, Attempt& a,
             nearest = d, nearer = k, target = empty;
       }
       if (!nearer) continue;
+      const int frame = c.base.frame_index(target);  // the segment's own, as place_clusters_as_units
       for (std::size_t i : nearer->members) {
-        const int frame = steadiest_frame_on(c, a, i, target);
         a.frame_of[i] = frame;
         place(i, frame);
         ++moved;
