@@ -13,9 +13,10 @@
 namespace s2kf::test_support {
 
 /// This test program's scratch folder under the build tree (tmp_<area>, one per program, so that
-/// programs running in parallel never share a file). Defined in a file CMake generates for each
-/// program, not by a definition on the command line: every test program then has the same
-/// definitions and can share one precompiled header.
+/// programs never share a file; ctest also runs each test of a program as a process of its own,
+/// side by side, so the tests of one program name their files apart). Defined in a file CMake generates for
+/// each program, not by a definition on the command line: every test program then has the same definitions
+/// and can share one precompiled header.
 const char* tmp_dir();
 
 /// A file of the repository's data/ folder.

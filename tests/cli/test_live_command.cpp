@@ -35,10 +35,13 @@ using namespace s2kf::test_support;
 
 using Server = ServeProcess;
 
-/// A subject calibrated on walk.c3d (so that live and track run the same filter), made once.
+/// A subject calibrated on walk.c3d (so that live and track run the same filter), made once per
+/// test program, in the running test's own folder: ctest runs each test as a program of its own,
+/// side by side, and two calibrations writing one file rename each other's temporary files away.
 std::string walk_subject() {
   static const std::string subject = [] {
-    const fs::path path = scratch("live") / "walk_subject.json";
+    const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    const fs::path path = scratch("live/" + test) / "walk_subject.json";
     const CommandResult r = run_command("calibrate " + data_file("walk.c3d") +
                                         " --frames 150 --iterations 1 --quiet --out " + path.string());
     EXPECT_EQ(r.status, 0) << r.output;
