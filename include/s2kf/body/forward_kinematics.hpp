@@ -214,17 +214,64 @@ S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
   }
 }
 
+namespace detail {
+/// Four doubles in one vector (GCC/Clang vector extension): compiled to the caller's instruction
+/// set, one AVX register or two SSE2 ones.
+typedef double Double4 __attribute__((vector_size(4 * sizeof(double))));
+
+#if defined(__clang__)
+#define S2KF_SHUFFLE4(a, b, i0, i1, i2, i3) __builtin_shufflevector(a, b, i0, i1, i2, i3)
+#else
+#define S2KF_SHUFFLE4(a, b, i0, i1, i2, i3) __builtin_shuffle(a, b, (Long4{i0, i1, i2, i3}))
+#endif
+
+/// to[k * stride + r] = from[r * S + k] for a 4 x 4 tile: four rows of four poses in, four pose
+/// columns of four rows out, so that every load and store moves four numbers.
+template <typename Scalar, Eigen::Index S>
+S2KF_ALWAYS_INLINE void transpose_four(const Scalar* from, double* to, Eigen::Index stride) {
+  typedef long long Long4 __attribute__((vector_size(4 * sizeof(long long))));
+  typedef Scalar Scalar4 __attribute__((vector_size(4 * sizeof(Scalar)), aligned(sizeof(Scalar)), may_alias));
+  typedef double Unaligned4
+      __attribute__((vector_size(4 * sizeof(double)), aligned(sizeof(double)), may_alias));
+  (void)sizeof(Long4);
+  const Double4 r0 = __builtin_convertvector(*reinterpret_cast<const Scalar4*>(from), Double4);
+  const Double4 r1 = __builtin_convertvector(*reinterpret_cast<const Scalar4*>(from + S), Double4);
+  const Double4 r2 = __builtin_convertvector(*reinterpret_cast<const Scalar4*>(from + 2 * S), Double4);
+  const Double4 r3 = __builtin_convertvector(*reinterpret_cast<const Scalar4*>(from + 3 * S), Double4);
+  const Double4 t0 = S2KF_SHUFFLE4(r0, r1, 0, 4, 2, 6), t1 = S2KF_SHUFFLE4(r0, r1, 1, 5, 3, 7);
+  const Double4 t2 = S2KF_SHUFFLE4(r2, r3, 0, 4, 2, 6), t3 = S2KF_SHUFFLE4(r2, r3, 1, 5, 3, 7);
+  *reinterpret_cast<Unaligned4*>(to) = S2KF_SHUFFLE4(t0, t2, 0, 1, 4, 5);
+  *reinterpret_cast<Unaligned4*>(to + stride) = S2KF_SHUFFLE4(t1, t3, 0, 1, 4, 5);
+  *reinterpret_cast<Unaligned4*>(to + 2 * stride) = S2KF_SHUFFLE4(t0, t2, 2, 3, 6, 7);
+  *reinterpret_cast<Unaligned4*>(to + 3 * stride) = S2KF_SHUFFLE4(t1, t3, 2, 3, 6, 7);
+}
+#undef S2KF_SHUFFLE4
+}  // namespace detail
+
 /// markers.col(i) = the i-th pose's ws.markers (rows x0, y0, z0, x1, ...), for the first n poses
-/// of a block. A transpose: eight rows at a time, so the source arrays and the destination
-/// columns in use stay in the L1 cache (row by row, or column by column, they do not).
-template <typename Scalar>
+/// of a block, by code for instruction set `Set`. A transpose, eight rows at a time, so the source
+/// arrays and the destination columns in use stay in the L1 cache (row by row, or column by
+/// column, they do not); with AVX2 and AVX-512 in 4 x 4 tiles (SSE2 has no 4-wide registers).
+template <InstructionSet Set = compiled_instruction_set(), typename Scalar>
 S2KF_ALWAYS_INLINE void copy_markers_out(const BasicForwardKinematicsWorkspace<Scalar>& ws, Eigen::Index n,
                                          double* markers, Eigen::Index rows, Eigen::Index stride) {
   constexpr Eigen::Index S = BasicForwardKinematicsWorkspace<Scalar>::kStride, kRows = 8;
   const Scalar* from = ws.markers.data();
+  Eigen::Index n4 = 0;  // poses done in tiles
+  if constexpr (Set >= InstructionSet::avx2) n4 = n - n % 4;
   for (Eigen::Index top = 0; top < rows; top += kRows) {
     const Eigen::Index r = std::min(kRows, rows - top);
-    for (Eigen::Index i = 0; i < n; ++i) {
+    if constexpr (Set >= InstructionSet::avx2) {
+      const Eigen::Index r4 = r - r % 4;
+      for (Eigen::Index i = 0; i < n4; i += 4) {
+        double* to = markers + i * stride + top;
+        for (Eigen::Index k = 0; k < r4; k += 4)
+          detail::transpose_four<Scalar, S>(from + (top + k) * S + i, to + k, stride);
+        for (Eigen::Index k = r4; k < r; ++k)
+          for (Eigen::Index j = 0; j < 4; ++j) to[j * stride + k] = from[(top + k) * S + i + j];
+      }
+    }
+    for (Eigen::Index i = n4; i < n; ++i) {
       double* to = markers + i * stride + top;
       for (Eigen::Index k = 0; k < r; ++k) to[k] = from[(top + k) * S + i];
     }

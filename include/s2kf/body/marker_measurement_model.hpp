@@ -117,7 +117,7 @@ class MarkerMeasurementModel {
       const Eigen::Index n = std::min(B, count - start);
       // The whole block in one function compiled for the active instruction set: every stage below
       // is a plain loop over the poses, inlined into it.
-      run_with_instruction_set(set, [&](auto) S2KF_ALWAYS_INLINE_LAMBDA {
+      run_with_instruction_set(set, [&](auto tag) S2KF_ALWAYS_INLINE_LAMBDA {
         const double* in = states.data() + start * states.outerStride();
         for (Eigen::Index i = 0; i < n; ++i, in += states.outerStride()) {
           for (int r = 0; r < 3; ++r) ws.root_position[r * S + i] = static_cast<Scalar>(in[r]);
@@ -130,8 +130,8 @@ class MarkerMeasurementModel {
           stage_local_rotations(n, ws, orientation.data());
         stage_joint_angles(n, ws);
         forward_kinematics_block(model_, selected_, ws, n);
-        copy_markers_out(ws, n, predictions.data() + start * predictions.outerStride(), predictions.rows(),
-                         predictions.outerStride());
+        copy_markers_out<decltype(tag)::value>(ws, n, predictions.data() + start * predictions.outerStride(),
+                                               predictions.rows(), predictions.outerStride());
       });
     }
   }

@@ -10,6 +10,8 @@
 #include <Eigen/Core>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 namespace s2kf::body {
 
@@ -33,7 +35,8 @@ S2KF_ALWAYS_INLINE void vector_sincos(const double* x, double* s, double* c, Eig
   double large = 0;               // count of arguments for the scalar fallback (NaN included)
   for (Eigen::Index i = 0; i < n; ++i) {
     const double xi = x[i];
-    const double k = (xi * kTwoOverPi + kRoundMagic) - kRoundMagic;
+    const double shifted = xi * kTwoOverPi + kRoundMagic;  // its last two bits are k mod 4
+    const double k = shifted - kRoundMagic;
     const double r = ((xi - k * kPio2Part1) - k * kPio2Part2) - k * kPio2Part3;  // |r| <= pi/4
     const double z = r * r;
     const double sin_r = r + z * r * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
@@ -41,14 +44,18 @@ S2KF_ALWAYS_INLINE void vector_sincos(const double* x, double* s, double* c, Eig
     const double w = 1.0 - hz;
     const double cos_r =
         w + (((1.0 - w) - hz) + z * z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6))))));
-    // Quadrant m = k mod 4 in {0, 1, 2, 3} with arithmetic only (no branches, so the loop
-    // vectorises): m = 2 high + odd; odd swaps sine and cosine, high negates both.
-    const double m = k - 4.0 * ((k * 0.25 - 0.375 + kRoundMagic) - kRoundMagic);
-    const double high = (m * 0.5 - 0.25 + kRoundMagic) - kRoundMagic;
-    const double odd = m - 2.0 * high;
-    const double sign = 1.0 - 2.0 * high;
-    s[i] = sign * ((1.0 - odd) * sin_r + odd * cos_r);
-    c[i] = sign * ((1.0 - odd) * cos_r - odd * sin_r);
+    // Quadrant k mod 4 from the bits, with integer masks only (no branches or blends, so the loop
+    // vectorises with SSE2 too): bit 0 swaps sine and cosine, bit 1 negates both.
+    std::uint64_t quadrant, sin_bits, cos_bits;
+    std::memcpy(&quadrant, &shifted, sizeof quadrant);
+    std::memcpy(&sin_bits, &sin_r, sizeof sin_bits);
+    std::memcpy(&cos_bits, &cos_r, sizeof cos_bits);
+    constexpr std::uint64_t kSignBit = std::uint64_t(1) << 63;
+    const std::uint64_t odd = std::uint64_t(0) - (quadrant & 1), flip = (quadrant & 2) << 62;
+    const std::uint64_t sine = ((cos_bits & odd) | (sin_bits & ~odd)) ^ flip;
+    const std::uint64_t cosine = (((sin_bits ^ kSignBit) & odd) | (cos_bits & ~odd)) ^ flip;
+    std::memcpy(s + i, &sine, sizeof sine);
+    std::memcpy(c + i, &cosine, sizeof cosine);
     large += std::abs(xi) <= kLimit ? 0.0 : 1.0;
   }
   if (large == 0) return;
