@@ -187,6 +187,40 @@ TEST(MarkerMeasurementModel, SelectedMarkersComeInTheRequestedOrder) {
   EXPECT_THROW(some(Eigen::MatrixXd::Zero(45, 70), y_some), s2kf::DimensionError);
 }
 
+TEST(MarkerMeasurementModel, EveryKernelVariantGivesTheSamePredictionsAsOnePoseAtATime) {
+  // The variants transpose the markers out of the block differently (4 x 4 tiles with AVX2 and
+  // AVX-512, one number at a time with SSE2): counts of poses and rows that are not multiples of 4
+  // reach every edge of the tiles.
+  const BodyModel body = mmm_body_model(1690);
+  MarkerMeasurementModel h(body, OrientationParameterization::local_rotation_error);
+  const Eigen::Matrix3d reference = rotation_from_rpy(Eigen::Vector3d(-0.3, 1.2, 2.0));
+  h.set_reference_orientation(reference);
+  std::vector<int> chosen;
+  for (const char* name : {"RTOE", "C7", "LAOL", "RHEE", "LFHD", "RWTS", "T10"})
+    chosen.push_back(body.marker_index(name));
+  h.select_markers(chosen);
+  std::mt19937 rng(7);
+  const Eigen::MatrixXd states = random_states(rng, 131, 0.5);
+  const BoundedJoints bounded(body);
+  const s2kf::InstructionSet active = s2kf::active_instruction_set();
+  for (const auto set :
+       {s2kf::InstructionSet::sse2, s2kf::InstructionSet::avx2, s2kf::InstructionSet::avx512}) {
+    if (set > s2kf::supported_instruction_set() || set < s2kf::compiled_instruction_set()) continue;
+    s2kf::use_instruction_set(set);
+    Eigen::MatrixXd predictions(21, states.cols());
+    h(states, predictions);
+    for (Eigen::Index i = 0; i < states.cols(); ++i) {
+      const Eigen::Matrix3Xd all = marker_positions(body, states.col(i).head<3>(),
+                                                    reference * rotation_exp(states.col(i).segment<3>(3)),
+                                                    bounded.angles(states.col(i).tail<kJointCount>()));
+      for (int k = 0; k < 7; ++k)
+        ASSERT_LT((predictions.col(i).segment<3>(3 * k) - all.col(chosen[k])).cwiseAbs().maxCoeff(), 1e-9)
+            << s2kf::instruction_set_name(set) << ", pose " << i << ", marker " << k;
+    }
+  }
+  s2kf::use_instruction_set(active);
+}
+
 TEST(MarkerMeasurementModel, NaNStatesGiveNaNPredictionsInTheirColumnOnly) {
   MarkerMeasurementModel h(mmm_body_model());
   std::mt19937 rng(6);

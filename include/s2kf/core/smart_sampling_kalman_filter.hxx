@@ -605,20 +605,21 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
     }
   };
   if (single_precision) {
-    // sqrt(w_i) (y_i - y^), scaled in double and rounded once.
+    // sqrt(w_i) (y_i - y^), scaled in double and rounded once; in the same pass over the columns,
+    // while each is in cache, the rows' sums of squares and each pair's difference y+_k - y-_k.
     auto y_dev_f = single_buffer(y_dev_f_, mo, count);
-    if (equal_weights_)
-      y_dev_f = (sqrt_weights_(0) * y_dev).template cast<float>();
-    else
-      y_dev_f = (y_dev * sqrt_weights_.asDiagonal()).template cast<float>();
     auto spread_f = single_buffer(component_spread_f_, mo, 1).col(0);
-    sum_of_squares(spread_f, y_dev_f);
+    auto pair_difference_f = single_buffer(pair_difference_f_, mo, symmetric_ ? h : 0);
+    spread_f.setZero();
+    for (Eigen::Index i = 0; i < count; ++i) {
+      y_dev_f.col(i) = (sqrt_weights_(equal_weights_ ? 0 : i) * y_dev.col(i)).template cast<float>();
+      spread_f += y_dev_f.col(i).cwiseAbs2();
+      if (symmetric_ && i >= o + h) pair_difference_f.col(i - o - h) = y_dev_f.col(i - h) - y_dev_f.col(i);
+    }
     component_spread_.head(mo) = spread_f.template cast<double>();
     auto regression_f = single_buffer(regression_f_, n, mo);
     regression_f.setZero();
     if (symmetric_) {
-      auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
-      pair_difference_f.noalias() = y_dev_f.middleCols(o, h) - y_dev_f.rightCols(h);
       add_product_transposed(regression_f, scaled_points_f_, pair_difference_f);
     } else {
       add_product_transposed(regression_f, scaled_points_f_, y_dev_f);
