@@ -297,8 +297,17 @@ class FilterCore {
   /// every component observed the model writes straight into y_dev_ (no gather).
   Eigen::MatrixXd& prepare_predictions(Eigen::Index m);
 
-  /// The observed rows of the model's predictions as deviations from their weighted mean, in y_dev_.
+  /// The observed rows of the model's predictions in y_dev_ and their weighted mean in y_mean_;
+  /// the deviations from it are formed by centre_deviations() where they are read in double.
   FilterStatus gather_observed(Eigen::Index m);
+
+  /// y_dev_ (observed rows) -= y_mean_, once after gather_observed. The default update's
+  /// single-precision regression subtracts the mean as it rounds instead: one pass less.
+  void centre_deviations() {
+    if (centred_) return;
+    y_dev_.topRows(observed_count_).colwise() -= y_mean_.head(observed_count_);
+    centred_ = true;
+  }
 
   /// The lower half of Cyy += sum w (y_i - y^)(y_i - y^)^T and Cyx = sum w (y_i - y^)(x_i - m)^T
   /// over the observed rows in y_dev_ (deviations) and x_dev_ / half_deviation_ (S z_i).
@@ -456,7 +465,8 @@ class FilterCore {
   BorderedCholesky bordered_;  ///< Cyy, or a large group's D_g and then the information matrix
   Eigen::VectorXd state_step_;
   Eigen::Index observed_count_ = 0;
-  bool direct_ = false;  ///< the model writes straight into y_dev_ (see prepare_predictions)
+  bool direct_ = false;   ///< the model writes straight into y_dev_ (see prepare_predictions)
+  bool centred_ = false;  ///< y_dev_ holds deviations from y_mean_, not the predictions
   std::vector<Eigen::Index> rejected_blocks_;  ///< ascending
   const std::vector<int>* groups_ = nullptr;   ///< UpdateOptions::information_groups of this update
   Eigen::Index group_block_size_ = 1;          ///< the block size, when groups_ is null

@@ -529,7 +529,7 @@ S2KF_INLINE FilterStatus FilterCore::gather_observed(Eigen::Index m) {
   // A NaN or infinite prediction makes its row's weighted mean NaN or infinite whatever the
   // weight (0 * inf is NaN), so checking the mean checks every prediction.
   if (!y_mean.allFinite()) return FilterStatus::non_finite_model_output;
-  y_dev_.topRows(mo).colwise() -= y_mean;
+  centred_ = false;
   return FilterStatus::ok;
 }
 
@@ -537,6 +537,7 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
                                                 Eigen::Block<Eigen::MatrixXd>& cyx, bool single_precision,
                                                 bool deviations_scaled) {
   const Eigen::Index mo = observed_count_;
+  centre_deviations();
   auto y_dev = y_dev_.topRows(mo);
   if (symmetric_) {
     // Pairs +s_k, -s_k with equal weights: sum over a pair of w (y_i - y^)(x_i - m)^T is
@@ -611,8 +612,13 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
     auto spread_f = single_buffer(component_spread_f_, mo, 1).col(0);
     auto pair_difference_f = single_buffer(pair_difference_f_, mo, symmetric_ ? h : 0);
     spread_f.setZero();
+    const auto y_mean = y_mean_.head(mo);
     for (Eigen::Index i = 0; i < count; ++i) {
-      y_dev_f.col(i) = (sqrt_weights_(equal_weights_ ? 0 : i) * y_dev.col(i)).template cast<float>();
+      const double scale = sqrt_weights_(equal_weights_ ? 0 : i);
+      if (centred_)
+        y_dev_f.col(i) = (scale * y_dev.col(i)).template cast<float>();
+      else
+        y_dev_f.col(i) = (scale * (y_dev.col(i) - y_mean)).template cast<float>();
       spread_f += y_dev_f.col(i).cwiseAbs2();
       if (symmetric_ && i >= o + h) pair_difference_f.col(i - o - h) = y_dev_f.col(i - h) - y_dev_f.col(i);
     }
@@ -628,6 +634,7 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
     if (quadratic_count_ > 0) accumulate_quadratic_regression(true);
     return;
   }
+  centre_deviations();
   scale_columns_by_sqrt_weights(y_dev);
   auto spread = component_spread_.head(mo);
   sum_of_squares(spread, y_dev);
@@ -785,6 +792,7 @@ S2KF_INLINE FilterStatus FilterCore::iteration_pass(const Eigen::Ref<const Eigen
                                                     const Eigen::Ref<const Eigen::MatrixXd>& covariance,
                                                     Iteration& iteration, double& nis) {
   const Eigen::Index mo = observed_count_;
+  centre_deviations();
   const Eigen::MatrixXd y_dev = y_dev_.topRows(mo);
   const Eigen::MatrixXd pyy = y_dev * samples_.weights.asDiagonal() * y_dev.transpose();
   const Eigen::MatrixXd pxy = x_dev_ * samples_.weights.asDiagonal() * y_dev.transpose();
