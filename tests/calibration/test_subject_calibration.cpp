@@ -528,6 +528,61 @@ TEST(SubjectCalibration, AMovingTrialBesideTheStaticOneSplitsTheArmsRoll) {
   EXPECT_THROW(options.validate(), std::invalid_argument);
 }
 
+// A static trial calibrated with a moving one counts as the distinct postures it shows
+// (CalibrationOptions::static_distinct_mm): its frames weigh their number over the trial's, data and
+// priors alike. Every static pose given twice then gives the subject of each given once (the
+// repeats show no new posture: every weight, the posture's shared prior and the shrinkage measured
+// against the static trial come out as before); counted frame by frame (0), the static trial
+// weighs twice and the subject moves. Soft tissue (8 mm) makes the two trials disagree, so the
+// static trial's weight matters.
+TEST(SubjectCalibration, AStaticTrialCountsAsTheDistinctPosturesItShows) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const sim::Subject subject = sim::make_subject(body::mmm_body_model(1750), sim::SubjectOptions{}, 9);
+  const sim::Recording static_trial =
+      static_recording(standing_still(subject.model.joint_count()), subject, 9);
+  const sim::Recording moving = test_support::sweep_recording(subject, 9, 200, 3.0);
+  MarkerSequence both = static_trial;
+  both.append_frames(moving);
+  const body::BodyModel model = body::mmm_body_model(1750);
+  const body::MarkerMapping mapping = body::map_markers(static_trial.labels, model.marker_names());
+  std::vector<std::pair<long, body::Pose>> once, twice, moving_poses;
+  for (long k = 0; k < static_trial.frame_count(); k += 10) {
+    once.emplace_back(k, static_trial.truth[static_cast<std::size_t>(k)]);
+    twice.insert(twice.end(), 2, once.back());
+  }
+  for (long k = 0; k < moving.frame_count(); k += 4)
+    moving_poses.emplace_back(static_trial.frame_count() + k, moving.truth[static_cast<std::size_t>(k)]);
+  once.insert(once.end(), moving_poses.begin(), moving_poses.end());
+  twice.insert(twice.end(), moving_poses.begin(), moving_poses.end());
+  calibration::CalibrationOptions options;  // the default shrinkage
+  options.static_pose_sd_rad = 3.0 * kPi / 180.0;
+  options.static_posture_estimated = true;
+  options.static_frames = static_trial.frame_count();
+  options.static_distinct_mm = 3.0;  // the drift moves the markers by less between some of the poses
+  const auto adjusted = [&](const std::vector<std::pair<long, body::Pose>>& poses, double distinct_mm) {
+    calibration::CalibrationOptions o = options;
+    o.static_distinct_mm = distinct_mm;
+    return calibration::adjust_subject_at_poses(model, mapping, fast_options(), both, poses, o);
+  };
+  const calibration::SubjectCalibration reference = adjusted(once, options.static_distinct_mm);
+  const calibration::SubjectCalibration repeated = adjusted(twice, options.static_distinct_mm);
+  const auto largest_shift = [&](const calibration::SubjectCalibration& a) {
+    double shift = 0;
+    for (std::size_t m = 0; m < model.markers.size(); ++m)
+      shift = std::max(shift, (a.model.markers[m].offset - reference.model.markers[m].offset).norm());
+    return shift;
+  };
+  EXPECT_LT(largest_shift(repeated), 1e-3);
+  for (const auto& [segment, scale] : reference.segment_scale)
+    EXPECT_NEAR(repeated.segment_scale.at(segment), scale, 1e-6) << segment;
+  EXPECT_LT((repeated.static_posture - reference.static_posture).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_GT(largest_shift(adjusted(twice, 0)), 0.1);
+  // The still trial's 30 poses show fewer distinct ones: counted frame by frame, the subject differs.
+  EXPECT_GT(largest_shift(adjusted(once, 0)), 0.1);
+  options.static_distinct_mm = -1;
+  EXPECT_THROW(options.validate(), std::invalid_argument);
+}
+
 // The weak-direction shrinkage (CalibrationOptions::weak_direction_shrink = c) keeps the fraction
 // mu / (mu + c) of the data's step along a direction whose share of information surviving the
 // poses' elimination is mu, and leaves the length factors free. A subject without soft tissue and

@@ -184,8 +184,15 @@ TEST(StaticTrialCommand, ARealPlugInGaitPairTracksWithItsStaticTrial) {
       "track " + moving + " --static " + trial + " --formats csv --quiet --out " + (dir / "pair").string());
   ASSERT_EQ(status, 0) << output;
   const nlohmann::json pair = read_json(dir / "pair.json");
-  // Measured: 7.6 mm (5.0 without the static trial: docs/static-trials.md, "A real pair").
-  EXPECT_LT(pair["mean_marker_distance_all_frames_mm"].get<double>(), 10.0);
+  const auto [without_status, without_output] = test_support::run_command(
+      "track " + moving + " --formats csv --quiet --out " + (dir / "without").string());
+  ASSERT_EQ(without_status, 0) << without_output;
+  const nlohmann::json without = read_json(dir / "without.json");
+  // The target: lower with the static trial than without. Measured: 4.89 mm against 4.95
+  // (docs/static-trials.md, "A real pair"); 7.61 while the static trial's 498 still frames counted
+  // one by one.
+  EXPECT_LT(pair["mean_marker_distance_all_frames_mm"].get<double>(),
+            without["mean_marker_distance_all_frames_mm"].get<double>());
   const long frames = pair["frames_tracked"].get<long>();
   for (const auto& rejected : pair["rejected_markers"])
     EXPECT_LE(rejected["innovation"].get<long>() + rejected["frozen"].get<long>(), frames / 10)

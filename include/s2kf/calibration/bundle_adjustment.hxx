@@ -48,7 +48,17 @@ struct BundleFrame {
   /// The lab's vertical that a Gaussian prior pulls the root's vertical axis towards
   /// (CalibrationOptions::static_upright_sd_rad); zero: none.
   Eigen::Vector3d prior_up = Eigen::Vector3d::Zero();
+  /// How many frames' worth this frame counts (data and priors alike): below 1 for the frames of a
+  /// static trial calibrated with a moving one (weigh_static_frames).
+  double weight = 1.0;
 };
+
+/// The frames counted by their weights.
+inline double weighted_frame_count(const std::vector<BundleFrame>& frames) {
+  double count = 0;
+  for (const BundleFrame& frame : frames) count += frame.weight;
+  return count;
+}
 
 /// Whether the posture's prior holds `frame` (a frame of the static trial).
 inline bool holds_posture_prior(const BundleFrame& frame) { return frame.prior_joints.size() > 0; }
@@ -68,6 +78,70 @@ inline void hold_static_frames_upright(std::vector<BundleFrame>& frames, const C
     if (holds_posture_prior(frame)) frame.prior_up = vertical;
 }
 
+/// Whether `frame` belongs to the static trial: every frame, or with options.static_frames > 0
+/// the recording's first static_frames.
+inline bool in_static_trial(const BundleFrame& frame, const CalibrationOptions& options) {
+  return options.static_frames == 0 || frame.index < options.static_frames;
+}
+
+/// RMS distance (mm) between the used markers the recording shows in both frames a and b; NaN for
+/// fewer than 3 such markers.
+inline double marker_rms_between(const body::MarkerMapping& mapping, const MarkerSequence& recording,
+                                 const std::vector<int>& used, long a, long b) {
+  double sum = 0;
+  int count = 0;
+  const auto pa = recording.frame(a), pb = recording.frame(b);
+  for (int m : used) {
+    const int point = mapping.point_of_marker[static_cast<std::size_t>(m)];
+    if (point < 0 || point >= pa.cols() || !recording.visible(point, a) || !recording.visible(point, b))
+      continue;
+    const double d2 = (pa.col(point) - pb.col(point)).squaredNorm();
+    if (std::isfinite(d2)) sum += d2, ++count;
+  }
+  return count >= 3 ? std::sqrt(sum / count) : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// With a moving trial beside the static one (options.static_frames > 0), the static trial's frames
+/// together count as the postures they show: a frame is a new one where its markers moved
+/// options.static_distinct_mm (RMS) or more from the last new one, and each frame weighs the number
+/// of new ones over the trial's. A still subject repeats one measurement of the placement (soft
+/// tissue included), so its frames carry the information of a few, however many there are.
+inline void weigh_static_frames(std::vector<BundleFrame>& frames, const body::MarkerMapping& mapping,
+                                const MarkerSequence& recording, const std::vector<int>& used,
+                                const CalibrationOptions& options) {
+  if (!(options.static_pose_sd_rad > 0) || options.static_frames <= 0 || !(options.static_distinct_mm > 0))
+    return;
+  long still = 0, distinct = 0, last = -1;
+  for (const BundleFrame& frame : frames) {
+    if (!in_static_trial(frame, options)) continue;
+    ++still;
+    const double moved = last < 0 ? std::numeric_limits<double>::quiet_NaN()
+                                  : marker_rms_between(mapping, recording, used, last, frame.index);
+    if (!(moved < options.static_distinct_mm)) ++distinct, last = frame.index;
+  }
+  if (distinct >= still) return;
+  for (BundleFrame& frame : frames)
+    if (in_static_trial(frame, options))
+      frame.weight = static_cast<double>(distinct) / static_cast<double>(still);
+}
+
+/// The median of `values` with each counted by its weight: the smallest value up to which the
+/// weights reach half their sum; with equal weights, track::quantile's median (the mean of the two
+/// middle values for an even count). NaN for no value.
+inline double weighted_median(const std::vector<double>& values, const std::vector<double>& weights) {
+  if (std::all_of(weights.begin(), weights.end(), [&](double w) { return w == weights.front(); }))
+    return track::quantile(values, 0.5);
+  std::vector<std::size_t> order(values.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return values[a] < values[b]; });
+  double total = 0;
+  for (double w : weights) total += w;
+  double below = 0;
+  for (std::size_t k : order)
+    if ((below += weights[k]) >= total / 2) return values[k];
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
 /// RMS distance (mm) per model marker between the recording and `model` at the frames' poses,
 /// over each frame's listed markers (indices into `used`); NaN for a marker no frame lists.
 inline std::vector<double> marker_residual_rms(const body::BodyModel& model,
@@ -75,7 +149,7 @@ inline std::vector<double> marker_residual_rms(const body::BodyModel& model,
                                                const MarkerSequence& recording, const std::vector<int>& used,
                                                const std::vector<BundleFrame>& frames) {
   std::vector<double> sum(static_cast<std::size_t>(model.marker_count()), 0.0);
-  std::vector<long> count(sum.size(), 0);
+  std::vector<double> count(sum.size(), 0.0);
   for (const BundleFrame& frame : frames) {
     const Eigen::Matrix3Xd predicted = body::marker_positions(
         model, body::joint_frames(model, frame.position, frame.rotation, frame.joints));
@@ -83,13 +157,13 @@ inline std::vector<double> marker_residual_rms(const body::BodyModel& model,
     for (int u : frame.markers) {
       const int m = used[static_cast<std::size_t>(u)];
       const int point = mapping.point_of_marker[static_cast<std::size_t>(m)];
-      sum[static_cast<std::size_t>(m)] += (points.col(point) - predicted.col(m)).squaredNorm();
-      ++count[static_cast<std::size_t>(m)];
+      sum[static_cast<std::size_t>(m)] += frame.weight * (points.col(point) - predicted.col(m)).squaredNorm();
+      count[static_cast<std::size_t>(m)] += frame.weight;
     }
   }
   std::vector<double> rms(sum.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t m = 0; m < sum.size(); ++m)
-    if (count[m] > 0) rms[m] = std::sqrt(sum[m] / static_cast<double>(count[m]));
+    if (count[m] > 0) rms[m] = std::sqrt(sum[m] / count[m]);
   return rms;
 }
 
@@ -130,12 +204,6 @@ inline Eigen::VectorXd mean_joints(const std::vector<BundleFrame>& frames) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(frames.empty() ? 0 : frames.front().joints.size());
   for (const BundleFrame& frame : frames) sum += frame.joints;
   return frames.empty() ? sum : Eigen::VectorXd(sum / static_cast<double>(frames.size()));
-}
-
-/// Whether `frame` belongs to the static trial: every frame, or with options.static_frames > 0
-/// the recording's first static_frames.
-inline bool in_static_trial(const BundleFrame& frame, const CalibrationOptions& options) {
-  return options.static_frames == 0 || frame.index < options.static_frames;
 }
 
 /// The frames of the static trial (in_static_trial).
@@ -283,9 +351,8 @@ class BundleAdjustment {
   /// The data-over-prior information ratio below which prior_only_fraction = `fraction` leaves a
   /// direction to the prior, for `frames` frames: that fraction of the ratio of one marker
   /// coordinate seen in every frame, frames x (offset prior SD / marker noise)^2.
-  double prior_only_threshold(double fraction, std::size_t frames) const {
-    return fraction * static_cast<double>(frames) * options_.offset_prior_sd_mm *
-           options_.offset_prior_sd_mm / noise_variance_;
+  double prior_only_threshold(double fraction, double frames) const {
+    return fraction * frames * options_.offset_prior_sd_mm * options_.offset_prior_sd_mm / noise_variance_;
   }
 
   /// The subject's information from the data of `frames` at their poses and `model` (the
@@ -297,7 +364,7 @@ class BundleAdjustment {
   Eigen::MatrixXd information_in_prior_metric(const body::BodyModel& model,
                                               const std::vector<BundleFrame>& frames,
                                               Eigen::VectorXd& prior_sd) {
-    scale_weight_ = static_cast<double>(frames.size()) /
+    scale_weight_ = weighted_frame_count(frames) /
                     (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
     pose_prior_frames_ = posture_prior_frames(frames);
     NormalEquations normal;
@@ -309,7 +376,7 @@ class BundleAdjustment {
   void adjust(body::BodyModel& model, std::vector<BundleFrame>& frames, CalibrationPass& pass) {
     // The length prior grows with the frames like the data: soft-tissue bias grows with them
     // too, and would otherwise carry the weakly observed lengths (lumbar, trunk) far off.
-    scale_weight_ = static_cast<double>(frames.size()) /
+    scale_weight_ = weighted_frame_count(frames) /
                     (options_.scale_prior_sd_per_frame * options_.scale_prior_sd_per_frame);
     pose_prior_frames_ = posture_prior_frames(frames);
     const double before = cost(model, frames, cumulative_);
@@ -329,7 +396,7 @@ class BundleAdjustment {
       bool accepted = false;
       linearise_all(model, frames, normal);
       if (it == 0) {
-        choose_estimated_directions(model, normal, frames.size(), pass);
+        choose_estimated_directions(model, normal, weighted_frame_count(frames), pass);
         if (options_.static_frames > 0) {
           // With a moving trial beside the static one, the shrinkage is measured against the static
           // trial's information alone: the moving frames' would hold the gauges, which only the
@@ -399,13 +466,14 @@ class BundleAdjustment {
     parallel_for(kCalibrationChunks, options_.threads, [&](int c) {
       const auto [begin, end] = chunk_range(frames.size(), c);
       for (std::size_t k = begin; k < end; ++k) {
-        chunk_sum[static_cast<std::size_t>(c)] += frame_residual_sum(model, frames[k], true);
-        if (holds_posture_prior(frames[k]))
-          chunk_sum[static_cast<std::size_t>(c)] +=
-              pose_prior_weight() * (frames[k].joints - frames[k].prior_joints).squaredNorm();
-        if (holds_upright(frames[k]))
-          chunk_sum[static_cast<std::size_t>(c)] +=
-              upright_prior_weight() * (frames[k].prior_up - frames[k].rotation.col(2)).squaredNorm();
+        const BundleFrame& frame = frames[k];
+        double& sum = chunk_sum[static_cast<std::size_t>(c)];
+        sum += frame.weight * frame_residual_sum(model, frame, true);
+        if (holds_posture_prior(frame))
+          sum += frame.weight * pose_prior_weight() * (frame.joints - frame.prior_joints).squaredNorm();
+        if (holds_upright(frame))
+          sum +=
+              frame.weight * upright_prior_weight() * (frame.prior_up - frame.rotation.col(2)).squaredNorm();
       }
     });
     double sum = 0;
@@ -422,24 +490,24 @@ class BundleAdjustment {
     return sum;
   }
 
-  /// The frames the posture's prior holds; at least 1.
-  static std::size_t posture_prior_frames(const std::vector<BundleFrame>& frames) {
-    const auto count = std::count_if(frames.begin(), frames.end(), holds_posture_prior);
-    return std::max<std::size_t>(static_cast<std::size_t>(count), 1);
+  /// The frames the posture's prior holds, counted by their weights; at least 1.
+  static double posture_prior_frames(const std::vector<BundleFrame>& frames) {
+    double count = 0;
+    for (const BundleFrame& frame : frames)
+      if (holds_posture_prior(frame)) count += frame.weight;
+    return std::max(count, 1.0);
   }
 
   /// The frames that share one prior's weight: the static trial's with static_posture_estimated,
   /// else each frame has its own.
-  double prior_sharing_frames() const {
-    return options_.static_posture_estimated ? std::max<double>(pose_prior_frames_, 1) : 1.0;
-  }
+  double prior_sharing_frames() const { return options_.static_posture_estimated ? pose_prior_frames_ : 1.0; }
 
-  /// Per frame.
+  /// Per frame of weight 1.
   double pose_prior_weight() const {
     return 1.0 / (options_.static_pose_sd_rad * options_.static_pose_sd_rad * prior_sharing_frames());
   }
 
-  /// Per frame, shared over the frames as the posture's prior is.
+  /// Per frame of weight 1, shared over the frames as the posture's prior is.
   double upright_prior_weight() const {
     return 1.0 / (options_.static_upright_sd_rad * options_.static_upright_sd_rad * prior_sharing_frames());
   }
@@ -473,7 +541,7 @@ class BundleAdjustment {
     scaled.reserve(static_cast<std::size_t>(std::max(scales_, 0)));
     for (int u : frame.markers) {
       const int m = used_[static_cast<std::size_t>(u)];
-      const double w = weight_[static_cast<std::size_t>(u)];
+      const double w = frame.weight * weight_[static_cast<std::size_t>(u)];
       const body::Marker& marker = model.markers[static_cast<std::size_t>(m)];
       const auto mf = static_cast<std::size_t>(marker.frame);
       const Eigen::Vector3d p = tf.origins[mf] + tf.rotations[mf] * marker.offset;
@@ -522,7 +590,7 @@ class BundleAdjustment {
     }
     // The static posture's prior on the joint angles (its Jacobian is the identity).
     if (holds_posture_prior(frame)) {
-      const double w = pose_prior_weight();
+      const double w = frame.weight * pose_prior_weight();
       for (int j = 0; j < model.joint_count(); ++j) {
         A(kRoot + j, kRoot + j) += w;
         g(kRoot + j) += w * (frame.prior_joints(j) - frame.joints(j));
@@ -530,7 +598,7 @@ class BundleAdjustment {
     }
     // The upright prior on the root's vertical axis R e_z: R Exp(w) e_z = R e_z + R (w_y, -w_x, 0).
     if (holds_upright(frame)) {
-      const double w = upright_prior_weight();
+      const double w = frame.weight * upright_prior_weight();
       Eigen::Matrix3d jr;
       jr.col(0) = -frame.rotation.col(1);
       jr.col(1) = frame.rotation.col(0);
@@ -819,8 +887,9 @@ class BundleAdjustment {
   Eigen::MatrixXd shrink_;     ///< the weak-direction shrinkage prior on the offsets; empty: none
   int scales_ = 0, unknowns_ = 0;
   double scale_weight_ = 0;
-  /// The static trial's frames the adjustment holds (they share the posture's prior).
-  std::size_t pose_prior_frames_ = 1;
+  /// The static trial's frames the adjustment holds, counted by their weights (they share the
+  /// posture's prior).
+  double pose_prior_frames_ = 1;
 };
 
 }  // namespace detail

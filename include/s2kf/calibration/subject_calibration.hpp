@@ -117,6 +117,14 @@ struct CalibrationOptions {
   /// lengths shared). The static frames fix the gauges, the moving ones what bending joints show
   /// (the roll split of upper arm and forearm, the joint axes). 0: every frame is the static trial.
   long static_frames = 0;
+  /// > 0 (with static_frames > 0): the static trial's frames count as the distinct postures they
+  /// show, a frame being a new one where its markers moved this far (mm, RMS) from the last new one
+  /// (detail::weigh_static_frames): a still subject repeats one measurement of the placement, so
+  /// counted frame by frame a long static trial would outweigh the moving trial in every direction
+  /// both see. 1.5 mm: two frames of a camera system's noise differ by about that much (twice
+  /// 0.7 mm per coordinate on simulated ones, each counted), a real still subject's by less.
+  /// 0: each frame counts once.
+  double static_distinct_mm = 1.5;
   long skip_frames = 20;  ///< frames after the tracker starts that are left out (convergence)
   int stride = 4;         ///< every stride-th tracked frame enters the bundle adjustment
   /// A residual beyond max(outlier_floor_mm, 4 x the round's median residual) is left out
@@ -152,6 +160,9 @@ struct CalibrationOptions {
     if (!(static_upright_sd_rad >= 0) || !std::isfinite(static_upright_sd_rad))
       throw std::invalid_argument("calibration: the static trial's upright SD must be finite and >= 0");
     if (static_frames < 0) throw std::invalid_argument("calibration: static_frames must be >= 0");
+    if (!(static_distinct_mm >= 0) || !std::isfinite(static_distinct_mm))
+      throw std::invalid_argument(
+          "calibration: the static trial's distinct-posture distance must be finite and >= 0");
     if (skip_frames < 0 || stride < 1)
       throw std::invalid_argument("calibration: skip_frames >= 0 and stride >= 1");
     if (threads < 1) throw std::invalid_argument("calibration: at least 1 thread is needed");

@@ -50,9 +50,11 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
       reference = detail::choose_static_pose(options, still, model.joint_count(), result.static_pose_choice);
     }
 
-    // Inliers: observed residuals at the tracked poses within max(floor, 4 x median).
+    detail::weigh_static_frames(frames, mapping, recording, used, options);
+    // Inliers: observed residuals at the tracked poses within max(floor, 4 x median), the medians
+    // counting each residual by its frame's weight (a long static trial's must not set them).
     std::vector<std::vector<double>> distances(frames.size());
-    std::vector<double> all;
+    std::vector<double> all, all_weights;
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const detail::BundleFrame& frame = frames[k];
       const Eigen::Matrix3Xd predicted = body::marker_positions(
@@ -66,19 +68,22 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
           continue;
         distances[k][u] = (points.col(point) - predicted.col(used[u])).norm();
         all.push_back(distances[k][u]);
+        all_weights.push_back(frame.weight);
       }
     }
-    const double threshold = std::max(options.outlier_floor_mm, 4.0 * track::quantile(all, 0.5));
+    const double threshold =
+        std::max(options.outlier_floor_mm, 4.0 * detail::weighted_median(all, all_weights));
     // A marker beyond that in most frames sits elsewhere on this subject than the model puts it,
     // which the adjustment corrects, so 4 x its own median is its threshold. (Markers placed by
     // their motion fit the uncalibrated model by construction, lowered the round's median and left
     // Plug-in Gait's PSIS markers out of every frame.)
     std::vector<double> own_threshold(used.size(), threshold);
     for (std::size_t u = 0; u < used.size(); ++u) {
-      std::vector<double> own;
+      std::vector<double> own, own_weights;
       for (std::size_t k = 0; k < frames.size(); ++k)
-        if (distances[k][u] >= 0) own.push_back(distances[k][u]);
-      if (const double median = own.empty() ? 0.0 : track::quantile(own, 0.5); median > threshold)
+        if (distances[k][u] >= 0) own.push_back(distances[k][u]), own_weights.push_back(frames[k].weight);
+      if (const double median = own.empty() ? 0.0 : detail::weighted_median(own, own_weights);
+          median > threshold)
         own_threshold[u] = 4.0 * median;
     }
     std::vector<detail::BundleFrame> kept;
@@ -130,6 +135,7 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
   for (detail::BundleFrame& frame : frames)  // a moving trial calibrated with the static one: no prior
     if (!detail::in_static_trial(frame, options)) frame.prior_joints.resize(0);
   detail::hold_static_frames_upright(frames, options);
+  detail::weigh_static_frames(frames, mapping, recording, used, options);
   SubjectCalibration result;
   result.model = model;
   CalibrationPass pass;

@@ -19,7 +19,7 @@ S2KF_INLINE SubjectInformation subject_information(const body::BodyModel& start,
   SubjectInformation result;
   result.segments = adjustment.segments();
   result.frames_used = static_cast<long>(frames.size());
-  result.threshold = adjustment.prior_only_threshold(prior_only_fraction, frames.size());
+  result.threshold = adjustment.prior_only_threshold(prior_only_fraction, static_cast<double>(frames.size()));
   if (!frames.empty())
     result.information = adjustment.information_in_prior_metric(model, frames, result.prior_sd);
   return result;
