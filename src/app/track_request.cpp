@@ -346,6 +346,9 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
                                                     options.calibration.threads);
     if (stretch.subject) {  // calibrated together with the recording, as --static does
       apply_static_settings(static_trial_settings(request), options.calibration);
+      // Its frames are the recording's own, among its calibration frames too: each keeps its weight
+      // (counted as its postures, test1's stretch tracked at 2.84 mm instead of 2.65).
+      options.calibration.static_distinct_mm = 0;
       options.static_trial = std::move(stretch.frames);
     }
     stretch_message = stretch.message;
