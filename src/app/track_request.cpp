@@ -113,6 +113,16 @@ bool shows_cluster_segment(const MarkerSequence& static_trial, const MarkerSetCh
   return false;
 }
 
+/// With static_posture "auto", where a segment of the static trial carries only markers placed by
+/// their motion (shows_cluster_segment): the posture held exactly (hold_placed_markers_posture), as
+/// only the pose held gives that segment the zero of its joint angles. Returns whether it is.
+bool hold_posture_for_placed_markers(const TrackRequest& request, const MarkerSequence& static_trial,
+                                     const MarkerSetChoice& choice, SubjectSettings& settings) {
+  if (request.static_posture != "auto" || !shows_cluster_segment(static_trial, choice)) return false;
+  hold_placed_markers_posture(settings);
+  return true;
+}
+
 /// `value` as few digits as say it ("1750", "0.5").
 std::string number_text(double value) {
   std::ostringstream text;
@@ -299,11 +309,10 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
     SubjectSettings settings = static_trial_settings(request);
     static_message = leave_out_moved_markers(options.static_trial, request.static_trial, prepared.choice.set,
                                              prepared.choice.inferred, source, options);
-    // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held,
-    // held exactly and tightly, as calibrate_static_trial does; where the set's named markers ride on
-    // every segment the static trial shows, they give the zeros and the posture is estimated.
-    if (shows_cluster_segment(options.static_trial, prepared.choice) && request.static_posture == "auto")
-      hold_placed_markers_posture(settings);
+    // Where the set's named markers ride on every segment the static trial shows, they give the
+    // zeros of the joint angles and the posture is estimated; else it is held, as calibrate_static_trial
+    // does.
+    hold_posture_for_placed_markers(request, options.static_trial, prepared.choice, settings);
     apply_static_settings(settings, options.calibration);
     options.calibration_may_fail = false;
     prepared.choice.source += "; calibrated together with the static trial " + request.static_trial;
@@ -502,8 +511,7 @@ CalibratedSubject calibrate_static_trial(const TrackRequest& request, const Samp
   }
   // Markers placed by their motion (clusters) get the zero of their joint angles from the pose held:
   // held exactly and tightly, or the posture trades with their offsets (docs/marker-sets.md).
-  done.held_exactly = request.static_posture == "auto" && shows_cluster_segment(trial, *completed);
-  if (done.held_exactly) hold_placed_markers_posture(settings);
+  done.held_exactly = hold_posture_for_placed_markers(request, trial, *completed, settings);
   if (placed) *placed = done;
   SequenceFrameSource source(trial);
   return calibrate_subject(source, option_name(request, "static") + " " + request.static_trial, settings,
