@@ -218,6 +218,8 @@ namespace detail {
 /// Four doubles in one vector (GCC/Clang vector extension): compiled to the caller's instruction
 /// set, one AVX register or two SSE2 ones.
 typedef double Double4 __attribute__((vector_size(4 * sizeof(double))));
+/// GCC's shuffle mask for Double4 (Clang's __builtin_shufflevector takes the indices as they are).
+typedef long long Long4 __attribute__((vector_size(4 * sizeof(long long))));
 
 #if defined(__clang__)
 #define S2KF_SHUFFLE4(a, b, i0, i1, i2, i3) __builtin_shufflevector(a, b, i0, i1, i2, i3)
@@ -229,11 +231,9 @@ typedef double Double4 __attribute__((vector_size(4 * sizeof(double))));
 /// columns of four rows out, so that every load and store moves four numbers.
 template <typename Scalar, Eigen::Index S>
 S2KF_ALWAYS_INLINE void transpose_four(const Scalar* from, double* to, Eigen::Index stride) {
-  typedef long long Long4 __attribute__((vector_size(4 * sizeof(long long))));
   typedef Scalar Scalar4 __attribute__((vector_size(4 * sizeof(Scalar)), aligned(sizeof(Scalar)), may_alias));
   typedef double Unaligned4
       __attribute__((vector_size(4 * sizeof(double)), aligned(sizeof(double)), may_alias));
-  (void)sizeof(Long4);
   const Double4 r0 = __builtin_convertvector(*reinterpret_cast<const Scalar4*>(from), Double4);
   const Double4 r1 = __builtin_convertvector(*reinterpret_cast<const Scalar4*>(from + S), Double4);
   const Double4 r2 = __builtin_convertvector(*reinterpret_cast<const Scalar4*>(from + 2 * S), Double4);
