@@ -7,7 +7,7 @@ markers seen each frame, averaged over frames) and, on simulated recordings, the
 against the truth over the 40 joints.
 
   scripts/python-env.sh     # the test environment with opensim and biorbd; prints its python
-  build/venv/bin/python scripts/peer-benchmark.py [--out DIR] [--frames N] [--repeat R] [REC.c3d ...]
+  build-venv/bin/python scripts/peer-benchmark.py [--out DIR] [--frames N] [--repeat R] [REC.c3d ...]
       [--simulate MOTION:SEED ...]
 
 Without recordings: data/handstand.c3d, data/walk.c3d, tests/data/c3d/85_02.c3d (CMU),

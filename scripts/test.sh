@@ -15,6 +15,10 @@ flags=(-DCMAKE_BUILD_TYPE=Release -DS2KF_WERROR=ON "${unity[@]}")
 # (tests/tools/pip_install.sh, built with this build's compiler and flags) finds the library's
 # units compiled already instead of compiling them again (3 minutes of CPU).
 launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# Paths below the source folder enter the cache's keys relative to the compiling folder: the wheel,
+# built in a folder beside build/, then finds the module's and the application layer's unity
+# batches too (their files are the build folder's own, so their absolute paths differ).
+export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
 skip=()
 # The C3D mutation test (C3dFuzz) runs for a bounded time: 5 s here, 10 s under the sanitizers,
 # where a mutation that reads out of bounds is caught (CI then runs libFuzzer on the reader for

@@ -7,6 +7,7 @@
 #   tests/tools/pip_install.sh SOURCE_DIR WORK_DIR [NAME=VALUE...]
 # Each NAME=VALUE is a CMake setting of the wheel's build (ctest passes its own build's compiler,
 # launcher and flags); without any, the wheel is built exactly as a user's `pip install .` builds it.
+# S2KF_WHEEL_BUILD_DIR, if set, is the folder the wheel is built in (else a temporary one).
 set -euo pipefail
 source_dir=$(cd "$1" && pwd)
 work=$2
@@ -30,6 +31,11 @@ PY
 export CMAKE_BUILD_PARALLEL_LEVEL=${CMAKE_BUILD_PARALLEL_LEVEL:-$(nproc 2>/dev/null || echo 2)}
 unset S2KF_DATA_DIR PYTHONPATH
 config=()
+# A build folder given (S2KF_WHEEL_BUILD_DIR) is made anew, so the wheel is always built whole.
+if [ -n "${S2KF_WHEEL_BUILD_DIR:-}" ]; then
+  rm -rf "$S2KF_WHEEL_BUILD_DIR"
+  config+=("--config-settings=build-dir=$S2KF_WHEEL_BUILD_DIR")
+fi
 for setting in "$@"; do
   # An empty value (no launcher, no extra flags) leaves the project's default.
   [ -n "${setting#*=}" ] && config+=("--config-settings=cmake.define.$setting")
