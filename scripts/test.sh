@@ -12,8 +12,8 @@ build=build
 unity=(-DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=16)
 flags=(-DCMAKE_BUILD_TYPE=Release -DS2KF_WERROR=ON "${unity[@]}")
 # A compiler cache: a second run after an edit recompiles only what changed, and the pip wheel test
-# (tests/tools/pip_install.sh, built with this build's compiler and flags) finds the library's
-# units compiled already instead of compiling them again (3 minutes of CPU).
+# (tests/tools/pip_install.sh, built with this build's compiler and flags) finds every object
+# compiled already instead of compiling them again (4 minutes of CPU).
 launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 # Paths below the source folder enter the cache's keys relative to the compiling folder: the wheel,
 # built in a folder beside build/, then finds the module's and the application layer's unity
