@@ -314,6 +314,10 @@ PreparedTrack prepare_track(FrameSource& source, const RecordingDescription& rec
     // does.
     hold_posture_for_placed_markers(request, options.static_trial, prepared.choice, settings);
     apply_static_settings(settings, options.calibration);
+    // The static trial, not the template fit that placed them, decides where such markers sit along
+    // their segments' gauges (calibration::CalibrationOptions::placed_by_motion).
+    for (const body::MarkerSetEntry& entry : prepared.choice.set.entries)
+      options.calibration.placed_by_motion.push_back(placed_by_motion(prepared.choice.inferred, entry.label));
     options.calibration_may_fail = false;
     prepared.choice.source += "; calibrated together with the static trial " + request.static_trial;
   } else if (!request.static_trial.empty()) {

@@ -583,6 +583,72 @@ TEST(SubjectCalibration, AStaticTrialCountsAsTheDistinctPosturesItShows) {
   EXPECT_THROW(options.validate(), std::invalid_argument);
 }
 
+// Markers placed by their motion (CalibrationOptions::placed_by_motion) start where the template fit
+// put them, which knows nothing of their turn about the joint: the feet's markers here are turned
+// 10 degrees about each ankle. Only the static trial's posture shows that turn, and a still static
+// trial counts as one posture beside the moving trial (static_distinct_mm), so the offsets' prior
+// and the weak-direction shrinkage towards the set would keep half of it; flagged as placed, the
+// static trial decides it. Placement errors only, poses given (adjust_subject_at_poses).
+TEST(SubjectCalibration, AStaticTrialDecidesTheTurnOfMarkersPlacedByTheirMotion) {
+  S2KF_SKIP_UNDER_SANITIZERS();
+  const sim::Subject subject = placement_only_subject(13);
+  const sim::Recording static_trial =
+      static_recording(standing_still(subject.model.joint_count()), subject, 13);
+  const sim::Recording moving = test_support::sweep_recording(subject, 13, 200, 3.0);
+  MarkerSequence both = static_trial;
+  both.append_frames(moving);
+  body::BodyModel model = subject.model;  // the true placement, the feet's markers turned
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(10.0 * kPi / 180.0, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+  std::vector<bool> placed(model.markers.size(), false);
+  for (const std::string segment : {"LA", "RA"})
+    for (const int m : body::markers_on_segment(model, segment)) {
+      model.markers[static_cast<std::size_t>(m)].offset =
+          turn * model.markers[static_cast<std::size_t>(m)].offset;
+      placed[static_cast<std::size_t>(m)] = true;
+    }
+  const body::MarkerMapping mapping = body::map_markers(static_trial.labels, model.marker_names());
+  std::vector<std::pair<long, body::Pose>> poses;
+  for (long k = 0; k < static_trial.frame_count(); k += 10)
+    poses.emplace_back(k, static_trial.truth[static_cast<std::size_t>(k)]);
+  for (long k = 0; k < moving.frame_count(); k += 4)
+    poses.emplace_back(static_trial.frame_count() + k, moving.truth[static_cast<std::size_t>(k)]);
+  calibration::CalibrationOptions options;  // the default offset prior and shrinkage
+  options.estimate_segment_scales = false;
+  options.static_pose_sd_rad = 0.5 * kPi / 180.0;  // held exactly, as for markers placed by their motion
+  options.static_frames = static_trial.frame_count();
+  options.static_distinct_mm = 5.0;  // the noise alone moves no marker that far: one posture
+  // The feet's turn left (degrees): the largest rotation angle that maps the calibrated foot offsets
+  // onto the true ones about the ankle (Kabsch without translation).
+  const auto turn_left_deg = [&](const std::vector<bool>& flags) {
+    calibration::CalibrationOptions o = options;
+    o.placed_by_motion = flags;
+    const body::BodyModel calibrated =
+        calibration::adjust_subject_at_poses(model, mapping, fast_options(), both, poses, o).model;
+    double largest = 0;
+    for (const std::string segment : {"LA", "RA"}) {
+      Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+      for (const int m : body::markers_on_segment(model, segment))
+        h += subject.model.markers[static_cast<std::size_t>(m)].offset *
+             calibrated.markers[static_cast<std::size_t>(m)].offset.transpose();
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      const Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
+      largest = std::max(largest, Eigen::AngleAxisd(r).angle() * 180.0 / kPi);
+    }
+    return largest;
+  };
+  const double named = turn_left_deg({}), flagged = turn_left_deg(placed);
+  std::cout << "feet turned 10 deg: " << named << " deg left as named markers, " << flagged
+            << " deg flagged as placed by their motion\n";
+  EXPECT_GT(named, 3.0);
+  EXPECT_LT(flagged, 0.3 * named);
+  options.placed_by_motion = std::vector<bool>(3, true);
+  EXPECT_THROW(calibration::adjust_subject_at_poses(model, mapping, fast_options(), both, poses, options),
+               std::invalid_argument);
+  options.placed_offset_prior_sd_mm = 0;
+  EXPECT_THROW(options.validate(), std::invalid_argument);
+}
+
 // The weak-direction shrinkage (CalibrationOptions::weak_direction_shrink = c) keeps the fraction
 // mu / (mu + c) of the data's step along a direction whose share of information surviving the
 // poses' elimination is mu, and leaves the length factors free. A subject without soft tissue and

@@ -334,7 +334,12 @@ class BundleAdjustment {
       const double w =
           options.marker_weight.empty() ? 1.0 : options.marker_weight[static_cast<std::size_t>(m)];
       weight_.push_back(w / noise_variance);
-      offset_prior_.push_back(1.0 / (options.offset_prior_sd_mm * options.offset_prior_sd_mm));
+      // A static trial shows a placed marker's gauges; the template fit's guess must not decide them.
+      const bool placed = options.static_pose_sd_rad > 0 && !options.placed_by_motion.empty() &&
+                          options.placed_by_motion[static_cast<std::size_t>(m)];
+      const double sd = placed ? options.placed_offset_prior_sd_mm : options.offset_prior_sd_mm;
+      offset_prior_.push_back(1.0 / (sd * sd));
+      placed_.push_back(placed);
     }
   }
 
@@ -760,6 +765,13 @@ class BundleAdjustment {
       shrink_.block<3, 3>(3 * static_cast<int>(u), 3 * static_cast<int>(u)).diagonal().array() +=
           offset_prior_[u];
     shrink_ *= options_.weak_direction_shrink;
+    // Placed markers are not pulled towards the template fit's guess (C is block diagonal per marker).
+    for (std::size_t u = 0; u < used_.size(); ++u) {
+      if (!placed_[u]) continue;
+      const auto at = 3 * static_cast<Eigen::Index>(u);
+      shrink_.middleRows(at, 3).setZero();
+      shrink_.middleCols(at, 3).setZero();
+    }
   }
 
   /// A's Levenberg-Marquardt damping: relative to its diagonal, with a floor that keeps the
@@ -882,6 +894,7 @@ class BundleAdjustment {
   std::vector<int> used_;
   std::vector<int> joint_scale_;
   std::vector<double> weight_, offset_prior_;
+  std::vector<bool> placed_;  ///< per used marker: placed by its motion, with a static trial
   double noise_variance_ = 1;
   Eigen::MatrixXd estimated_;  ///< basis of the subject directions adjusted; empty: all of them
   Eigen::MatrixXd shrink_;     ///< the weak-direction shrinkage prior on the offsets; empty: none

@@ -133,6 +133,15 @@ struct CalibrationOptions {
   /// Per model marker relative weight (e.g. the marker set's `weight` over its noise squared,
   /// scaled to 1 for the tracker's noise); empty: all 1.
   std::vector<double> marker_weight;
+  /// Per model marker: placed by its motion (markerset inference), not named by the marker set;
+  /// empty: none. With a static trial (static_pose_sd_rad > 0) such a marker's offset gets the
+  /// prior placed_offset_prior_sd_mm and no weak-direction shrinkage: its offset in the set is the
+  /// template fit's guess from the same motion, which knows nothing of the gauges (a cluster turned
+  /// about its joint) that only the static trial's posture shows, so the static trial decides them.
+  std::vector<bool> placed_by_motion;
+  /// SD (mm, per coordinate) of a placed marker's offset prior with a static trial: a guard for
+  /// directions no frame sees, far looser than the template fit's tens of millimetres of error.
+  double placed_offset_prior_sd_mm = 100.0;
   bool final_pass = true;  ///< track once more with the calibrated model to report its distance
   /// Frames of the calibration recording where a new stretch begins (stretches cut from different
   /// parts of a longer recording and put one after another): the tracker starts afresh there, and
@@ -145,6 +154,9 @@ struct CalibrationOptions {
       throw std::invalid_argument("calibration: at least 1 bundle-adjustment iteration is needed");
     if (!(offset_prior_sd_mm > 0))
       throw std::invalid_argument("calibration: the offset prior SD must be positive");
+    if (!(placed_offset_prior_sd_mm > 0) || !std::isfinite(placed_offset_prior_sd_mm))
+      throw std::invalid_argument(
+          "calibration: the placed markers' offset prior SD must be positive and finite");
     if (!(scale_prior_sd_per_frame > 0))
       throw std::invalid_argument("calibration: the scale prior SD must be positive");
     if (!(prior_only_fraction >= 0 && prior_only_fraction < 1))

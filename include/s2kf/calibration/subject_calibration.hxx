@@ -23,6 +23,9 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
   if (!options.marker_weight.empty() &&
       options.marker_weight.size() != static_cast<std::size_t>(model.marker_count()))
     throw std::invalid_argument("calibration: one weight per model marker is needed");
+  if (!options.placed_by_motion.empty() &&
+      options.placed_by_motion.size() != static_cast<std::size_t>(model.marker_count()))
+    throw std::invalid_argument("calibration: one placed-by-motion flag per model marker is needed");
 
   const body::BodyModel start = model;
   SubjectCalibration result;
@@ -125,6 +128,9 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
   model.validate();
   if (mapping.point_of_marker.size() != static_cast<std::size_t>(model.marker_count()))
     throw std::invalid_argument("calibration: the marker mapping does not fit the body model");
+  if (!options.placed_by_motion.empty() &&
+      options.placed_by_motion.size() != static_cast<std::size_t>(model.marker_count()))
+    throw std::invalid_argument("calibration: one placed-by-motion flag per model marker is needed");
   detail::BundleAdjustment adjustment(model, mapping, recording, options,
                                       tracker_options.marker_noise_mm * tracker_options.marker_noise_mm);
   const std::vector<int>& used = adjustment.used();
