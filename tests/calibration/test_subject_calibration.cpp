@@ -640,6 +640,7 @@ TEST(SubjectCalibration, AStaticTrialDecidesTheTurnOfMarkersPlacedByTheirMotion)
   const double named = turn_left_deg({}), flagged = turn_left_deg(placed);
   std::cout << "feet turned 10 deg: " << named << " deg left as named markers, " << flagged
             << " deg flagged as placed by their motion\n";
+  // Measured: 6.6 degrees left as named markers (the set's turn half kept), 0.2 flagged as placed.
   EXPECT_GT(named, 3.0);
   EXPECT_LT(flagged, 0.3 * named);
   options.placed_by_motion = std::vector<bool>(3, true);
