@@ -170,6 +170,24 @@ BENCHMARK(BM_PartForwardKinematicsSingle)
     ->ArgNames({"L", "visible"})
     ->Unit(benchmark::kMicrosecond);
 
+// The same samples through evaluate_symmetric as the tracker runs it by default: the mean pose in
+// double, each sample as its float deviation from it (the LCD set is symmetric: origin, + half, - half).
+void BM_PartForwardKinematicsDeviations(benchmark::State& state) {
+  const int samples = static_cast<int>(state.range(0));
+  ConvergedState c = converged_state(samples);
+  c.model.set_single_precision_deviations(true);
+  const SampleSet set = lcd_sample_set(46, samples).set;
+  const Eigen::MatrixXd x = draw(c, set);
+  const Eigen::Index h = samples / 2, origin = samples % 2;
+  const Eigen::MatrixXd half = x.middleCols(origin, h).colwise() - c.state.mean;
+  Eigen::MatrixXd y(c.model.measurement_dimension(), x.cols());
+  for (auto _ : state) {
+    c.model.evaluate_symmetric(x, c.state.mean, half, origin, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+}
+BENCHMARK(BM_PartForwardKinematicsDeviations)->Apply(add_args);
+
 }  // namespace
 
 BENCHMARK_MAIN();

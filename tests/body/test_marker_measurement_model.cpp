@@ -116,6 +116,100 @@ TEST(MarkerMeasurementModel, SinglePrecisionAgreesWithDoubleToFloatRoundingAtBod
   }
 }
 
+// The filter's symmetric sample sets: columns [mean, mean + H, mean - H].
+Eigen::MatrixXd symmetric_states(const Eigen::VectorXd& mean, const Eigen::MatrixXd& half,
+                                 Eigen::Index origin) {
+  Eigen::MatrixXd states(mean.size(), origin + 2 * half.cols());
+  states.leftCols(origin).colwise() = mean;
+  states.middleCols(origin, half.cols()) = half.colwise() + mean;
+  states.rightCols(half.cols()) = (-half).colwise() + mean;
+  return states;
+}
+
+TEST(MarkerMeasurementModel, FloatDeviationsFromTheMeanPoseKeepTheirRelativePrecision) {
+  // Each sample's prediction minus the mean pose's, against the same difference of double
+  // evaluations (whose rounding, about 1e-13 mm, is far below the bound): within 2e-6 of the
+  // column's largest deviation, for deviations from 0.3 rad down to 1e-5 rad (about 0.01 mm at the
+  // markers), where float forward kinematics of the whole pose, which rounds the lab coordinates to
+  // about 1e-4 mm, is off by a large part of the deviation itself.
+  const BodyModel body = mmm_body_model(1750);
+  const s2kf::InstructionSet active = s2kf::active_instruction_set();
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  for (const auto orientation :
+       {OrientationParameterization::roll_pitch_yaw, OrientationParameterization::local_rotation_error}) {
+    MarkerMeasurementModel twice(body, orientation), deviations(body, orientation),
+        whole_float(body, orientation);
+    const Eigen::Matrix3d reference = rotation_from_rpy(Eigen::Vector3d(0.4, 1.3, -1.0));
+    for (MarkerMeasurementModel* h : {&twice, &deviations, &whole_float})
+      h->set_reference_orientation(reference);
+    deviations.set_single_precision_deviations(true);
+    whole_float.set_single_precision(true);
+    Eigen::VectorXd mean = random_states(rng, 1, 0.2).col(0);
+    mean.tail(kJointCount) = mean.tail(kJointCount).cwiseMax(-1.5).cwiseMin(1.5);  // Theta near +-pi/2 too
+    for (const double scale : {0.3, 1e-2, 1e-5}) {
+      for (const auto& [origin, pairs] :
+           {std::pair<Eigen::Index, Eigen::Index>{1, 150}, {0, 350}}) {  // 1 and 3 blocks
+        Eigen::MatrixXd half(kStateDimension, pairs);
+        for (Eigen::Index k = 0; k < pairs; ++k)
+          for (Eigen::Index r = 0; r < kStateDimension; ++r)
+            half(r, k) = (r < 3 ? 300 : 1) * scale * normal(rng);
+        const Eigen::MatrixXd states = symmetric_states(mean, half, origin);
+        Eigen::MatrixXd expected(150, states.cols()), at_mean(150, 1), whole(150, states.cols());
+        twice(states, expected);
+        twice(mean, at_mean);
+        whole_float(states, whole);
+        for (const auto set :
+             {s2kf::InstructionSet::sse2, s2kf::InstructionSet::avx2, s2kf::InstructionSet::avx512}) {
+          if (set > s2kf::supported_instruction_set() || set < s2kf::compiled_instruction_set()) continue;
+          s2kf::use_instruction_set(set);
+          Eigen::MatrixXd predictions(150, states.cols());
+          deviations.evaluate_symmetric(states, mean, half, origin, predictions);
+          double worst = 0, worst_whole = 0;
+          for (Eigen::Index i = origin; i < states.cols(); ++i) {
+            const Eigen::VectorXd truth = expected.col(i) - at_mean.col(0);
+            const double size = truth.cwiseAbs().maxCoeff();
+            worst = std::max(worst, (predictions.col(i) - expected.col(i)).cwiseAbs().maxCoeff() / size);
+            worst_whole =
+                std::max(worst_whole, (whole.col(i) - expected.col(i)).cwiseAbs().maxCoeff() / size);
+          }
+          for (Eigen::Index i = 0; i < origin; ++i)  // the mean itself: no deviation but rounding
+            EXPECT_LT((predictions.col(i) - at_mean.col(0)).cwiseAbs().maxCoeff(), 1e-9);
+          EXPECT_LT(worst, 2e-6) << s2kf::instruction_set_name(set) << ", deviations of " << scale;
+          EXPECT_GT(worst, 0.0);  // it did run in float
+          if (scale == 1e-5) {
+            EXPECT_GT(worst_whole, 1e-3);  // the bound tells float deviations from float poses
+          }
+        }
+      }
+    }
+  }
+  s2kf::use_instruction_set(active);
+}
+
+TEST(MarkerMeasurementModel, SymmetricEvaluationIsTheOrdinaryOneWithoutFloatDeviations) {
+  const BodyModel body = mmm_body_model(1690);
+  MarkerMeasurementModel h(body, OrientationParameterization::local_rotation_error);
+  std::mt19937 rng(12);
+  const Eigen::VectorXd mean = random_states(rng, 1, 0.3).col(0);
+  const Eigen::MatrixXd half = 0.1 * random_states(rng, 20, 0.3);
+  const Eigen::MatrixXd states = symmetric_states(mean, half, 1);
+  Eigen::MatrixXd expected(150, 41), predictions(150, 41);
+  h(states, expected);
+  h.evaluate_symmetric(states, mean, half, 1, predictions);
+  EXPECT_EQ(predictions, expected);
+  h.set_single_precision_deviations(true);
+  EXPECT_THROW(h.evaluate_symmetric(states, mean, half.leftCols(19), 1, predictions), s2kf::DimensionError);
+  EXPECT_THROW(h.evaluate_symmetric(states, mean.head(45), half, 1, predictions), s2kf::DimensionError);
+  // After the first call with these sizes, no allocation.
+  h.evaluate_symmetric(states, mean, half, 1, predictions);
+  allocations = 0;
+  counting = true;
+  h.evaluate_symmetric(states, mean, half, 1, predictions);
+  counting = false;
+  EXPECT_EQ(allocations.load(), 0);
+}
+
 // At pitch = 90 deg roll and yaw turn about the same axis: their marker Jacobian columns are parallel.
 // The local rotation error keeps three independent directions there.
 TEST(MarkerMeasurementModel, LocalRotationErrorStaysFullRankAtPitchNinetyDegrees) {

@@ -412,6 +412,57 @@ TEST(S2kfIterated, LinearModelGivesTheKalmanResultForAnyNumberOfPasses) {
   EXPECT_LT(relative_error(iterated.covariance, kf.covariance), 1e-10);
 }
 
+// A model with evaluate_symmetric: it records what the update handed it and evaluates the same
+// cubic as the plain callable, from the mean and the half deviations alone.
+struct SymmetricCube {
+  int calls = 0;
+  Eigen::VectorXd mean;
+  void operator()(const Eigen::MatrixXd& x, Eigen::MatrixXd& out) const { out = x.array().cube().matrix(); }
+  void evaluate_symmetric(const Eigen::MatrixXd& states, const Eigen::Ref<const Eigen::VectorXd>& m,
+                          const Eigen::MatrixXd& half, Eigen::Index origin, Eigen::MatrixXd& out) {
+    ++calls;
+    mean = m;
+    Eigen::MatrixXd rebuilt(m.size(), origin + 2 * half.cols());
+    rebuilt.leftCols(origin).colwise() = m;
+    rebuilt.middleCols(origin, half.cols()) = half.colwise() + m;
+    rebuilt.rightCols(half.cols()) = (-half).colwise() + m;
+    EXPECT_LT((rebuilt - states).cwiseAbs().maxCoeff(), 1e-12);  // the columns the generic model gets
+    out = rebuilt.array().cube().matrix();
+  }
+};
+
+TEST(S2kfSymmetricModels, TheUpdateHandsASymmetricSetToEvaluateSymmetricAsMeanAndHalfDeviations) {
+  std::mt19937_64 rng(9);
+  const int n = 3;
+  const Eigen::MatrixXd r = 0.5 * Eigen::MatrixXd::Identity(n, n);
+  const Eigen::VectorXd y = random_matrix(n, 1, rng);
+  const GaussianXd prior(random_matrix(n, 1, rng), random_spd(n, rng));
+  const auto cube = [](const Eigen::MatrixXd& x, Eigen::MatrixXd& out) { out = x.array().cube().matrix(); };
+  // The LCD sets are symmetric (with the origin and without); a random set is not: the plain callable runs.
+  for (const auto& [set, symmetric_set] : {std::pair{s2kf::compute_lcd_sample_set(n, 31).set, true},
+                                           std::pair{s2kf::compute_lcd_sample_set(n, 30).set, true},
+                                           std::pair{s2kf::random_sample_set(n, 30, 2), false}}) {
+    S2kf plain_filter(set), symmetric_filter(set);
+    GaussianXd plain = prior, symmetric = prior;
+    SymmetricCube model;
+    ASSERT_TRUE(plain_filter.update(plain, cube, y, r).ok());
+    ASSERT_TRUE(symmetric_filter.update(symmetric, model, y, r).ok());
+    EXPECT_EQ(model.calls, symmetric_set ? 1 : 0);
+    if (model.calls > 0) {
+      EXPECT_EQ(model.mean, prior.mean);
+    }
+    EXPECT_LT(relative_error(symmetric.mean, plain.mean), 1e-12);
+    EXPECT_LT(relative_error(symmetric.covariance, plain.covariance), 1e-12);
+    // The iterated update works on all deviations and calls the plain callable.
+    model.calls = 0;
+    s2kf::UpdateOptions options;
+    options.iterations = 3;
+    GaussianXd iterated = prior;
+    ASSERT_TRUE(symmetric_filter.update(iterated, model, y, r, options).ok());
+    EXPECT_EQ(model.calls, 0);
+  }
+}
+
 // y = x^3 + v with an informative measurement: the exact posterior mean comes from 1-D quadrature.
 TEST(S2kfIterated, PosteriorLinearisationMovesTheMeanCloserToTheExactPosterior) {
   const double prior_mean = 1.0, prior_sd = 0.5, noise_sd = 0.05, y = 2.0;

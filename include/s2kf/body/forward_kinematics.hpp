@@ -83,6 +83,9 @@ struct BasicForwardKinematicsWorkspace {
   std::vector<Scalar> root_rotation;  ///< 9 arrays: entry (r, c) at index 3 c + r
   std::vector<Scalar> angles;         ///< one array per joint (staging for sin_q, cos_q)
   std::vector<Scalar> sin_q, cos_q;   ///< one array per joint
+  /// forward_kinematics_deviation_block only: sin q - sin q_mean and cos q - cos q_mean per joint
+  /// (sized by prepare_deviations).
+  std::vector<Scalar> delta_sin_q, delta_cos_q;
   // Results of one block.
   std::vector<Scalar> rotation;  ///< 9 arrays per frame, entry (r, c) of frame f at 9 f + 3 c + r
   std::vector<Scalar> origin;    ///< 3 arrays per frame (only frames with their own origin are written)
@@ -123,6 +126,14 @@ struct BasicForwardKinematicsWorkspace {
     for (int m = 0; m < model.marker_count(); ++m) all_markers[m] = m;
   }
 
+  /// prepare() and the buffers of forward_kinematics_deviation_block.
+  void prepare_deviations(const BodyModel& model, Eigen::Index marker_count) {
+    prepare(model, marker_count);
+    const auto wanted = static_cast<std::size_t>(model.joint_count() * kStride);
+    if (delta_sin_q.size() != wanted) delta_sin_q.assign(wanted, Scalar(0));
+    if (delta_cos_q.size() != wanted) delta_cos_q.assign(wanted, Scalar(0));
+  }
+
   Scalar* array(std::vector<Scalar>& buffer, Eigen::Index index) { return buffer.data() + index * kStride; }
 
   /// Poses per block for a batch of `count`: as few blocks as kBlock allows, of equal size.
@@ -134,16 +145,30 @@ struct BasicForwardKinematicsWorkspace {
 
 using ForwardKinematicsWorkspace = BasicForwardKinematicsWorkspace<double>;
 
-/// Runs forward kinematics on the first n (<= kBlock) poses staged in `ws` (root_position,
-/// root_rotation, sin_q, cos_q) and writes ws.markers for the markers listed in `marker_indices`
-/// (in that order). `ws.prepare(model, marker_indices.size())` must have been called. Plain loops
-/// over the poses, always inlined, so that a caller compiled for another instruction set
-/// (core/instruction_set.hpp) vectorises them with its own registers.
+namespace detail {
+/// One row of a joint's turn for deviations from the mean pose (forward_kinematics_deviation_block).
+/// A function of its own so that the compiler takes the arrays' __restrict (of parameters): the
+/// eight arrays need more run-time overlap checks than it makes before it vectorises a loop.
 template <typename Scalar>
-S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
+S2KF_ALWAYS_INLINE void turn_deviation(Scalar* __restrict fu, Scalar* __restrict fv,
+                                       const Scalar* __restrict pu, const Scalar* __restrict pv,
+                                       const Scalar* __restrict c, const Scalar* __restrict s,
+                                       const Scalar* __restrict dc, const Scalar* __restrict ds, Scalar mu,
+                                       Scalar mv, Eigen::Index n) {
+  for (Eigen::Index i = 0; i < n; ++i) {
+    fu[i] = (dc[i] * mu + ds[i] * mv) + (c[i] * pu[i] + s[i] * pv[i]);
+    fv[i] = (dc[i] * mv - ds[i] * mu) + (c[i] * pv[i] - s[i] * pu[i]);
+  }
+}
+
+/// forward_kinematics_block and, with kDeviations, forward_kinematics_deviation_block: the joint
+/// chain and the markers. Origins and markers are linear in the frames' rotations and origins, so
+/// the deviations pass through the same code; only a joint's rotation differs.
+template <bool kDeviations, typename Scalar>
+S2KF_ALWAYS_INLINE void forward_kinematics_chain(const BodyModel& model,
                                                  const std::vector<int>& marker_indices,
-                                                 BasicForwardKinematicsWorkspace<Scalar>& ws,
-                                                 Eigen::Index n) {
+                                                 BasicForwardKinematicsWorkspace<Scalar>& ws, Eigen::Index n,
+                                                 const Scalar* mean_rotation) {
   auto rotation = [&](int frame, int r, int c) {
     return ws.array(ws.rotation, 9 * ws.column_frame[3 * frame + c] + 3 * c + r);
   };
@@ -199,9 +224,16 @@ S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
     for (int r = 0; r < 3; ++r) {
       const Scalar* __restrict pu = rotation(p, r, u), * __restrict pv = rotation(p, r, v);
       Scalar* __restrict fu = rotation(f, r, u), * __restrict fv = rotation(f, r, v);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        fu[i] = c[i] * pu[i] + s[i] * pv[i];
-        fv[i] = c[i] * pv[i] - s[i] * pu[i];
+      if constexpr (kDeviations) {
+        // f - f_mean = (c - c_mean) pu_mean + (s - s_mean) pv_mean + c (pu - pu_mean) + s (pv - pv_mean):
+        // every term as small as the sample's deviation, so float keeps its relative precision.
+        turn_deviation(fu, fv, pu, pv, c, s, ws.array(ws.delta_cos_q, j), ws.array(ws.delta_sin_q, j),
+                       mean_rotation[9 * p + 3 * u + r], mean_rotation[9 * p + 3 * v + r], n);
+      } else {
+        for (Eigen::Index i = 0; i < n; ++i) {
+          fu[i] = c[i] * pu[i] + s[i] * pv[i];
+          fv[i] = c[i] * pv[i] - s[i] * pu[i];
+        }
       }
     }
   }
@@ -212,6 +244,35 @@ S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
       offset(ws.array(ws.markers, 3 * static_cast<Eigen::Index>(k) + r), origin(marker.frame, r),
              marker.frame, r, marker.offset);
   }
+}
+}  // namespace detail
+
+/// Runs forward kinematics on the first n (<= kBlock) poses staged in `ws` (root_position,
+/// root_rotation, sin_q, cos_q) and writes ws.markers for the markers listed in `marker_indices`
+/// (in that order). `ws.prepare(model, marker_indices.size())` must have been called. Plain loops
+/// over the poses, always inlined, so that a caller compiled for another instruction set
+/// (core/instruction_set.hpp) vectorises them with its own registers.
+template <typename Scalar>
+S2KF_ALWAYS_INLINE void forward_kinematics_block(const BodyModel& model,
+                                                 const std::vector<int>& marker_indices,
+                                                 BasicForwardKinematicsWorkspace<Scalar>& ws,
+                                                 Eigen::Index n) {
+  detail::forward_kinematics_chain<false>(model, marker_indices, ws, n, static_cast<const Scalar*>(nullptr));
+}
+
+/// The same for deviations from a mean pose: ws.root_position and ws.root_rotation hold each pose's
+/// root position and rotation minus the mean pose's, ws.sin_q and ws.cos_q each joint's sine and
+/// cosine, ws.delta_sin_q and ws.delta_cos_q those minus the mean pose's, and `mean_rotation` the
+/// mean pose's frame rotations (entry (r, c) of frame f at 9 f + 3 c + r); ws.markers receives
+/// each marker minus the mean pose's. `ws.prepare_deviations(model, marker_indices.size())` must
+/// have been called. What a sample shares with the mean pose is never recomputed, and the
+/// deviations keep their relative precision in float.
+template <typename Scalar>
+S2KF_ALWAYS_INLINE void forward_kinematics_deviation_block(const BodyModel& model,
+                                                           const std::vector<int>& marker_indices,
+                                                           BasicForwardKinematicsWorkspace<Scalar>& ws,
+                                                           const Scalar* mean_rotation, Eigen::Index n) {
+  detail::forward_kinematics_chain<true>(model, marker_indices, ws, n, mean_rotation);
 }
 
 namespace detail {
@@ -227,10 +288,11 @@ typedef long long Long4 __attribute__((vector_size(4 * sizeof(long long))));
 #define S2KF_SHUFFLE4(a, b, i0, i1, i2, i3) __builtin_shuffle(a, b, (Long4{i0, i1, i2, i3}))
 #endif
 
-/// to[k * stride + r] = from[r * S + k] for a 4 x 4 tile: four rows of four poses in, four pose
-/// columns of four rows out, so that every load and store moves four numbers.
+/// to[k * stride + r] = from[r * S + k] + offset[r] for a 4 x 4 tile: four rows of four poses in,
+/// four pose columns of four rows out, so that every load and store moves four numbers.
 template <typename Scalar, Eigen::Index S>
-S2KF_ALWAYS_INLINE void transpose_four(const Scalar* from, double* to, Eigen::Index stride) {
+S2KF_ALWAYS_INLINE void transpose_four(const Scalar* from, double* to, Eigen::Index stride,
+                                       const Double4& offset) {
   typedef Scalar Scalar4 __attribute__((vector_size(4 * sizeof(Scalar)), aligned(sizeof(Scalar)), may_alias));
   typedef double Unaligned4
       __attribute__((vector_size(4 * sizeof(double)), aligned(sizeof(double)), may_alias));
@@ -240,23 +302,27 @@ S2KF_ALWAYS_INLINE void transpose_four(const Scalar* from, double* to, Eigen::In
   const Double4 r3 = __builtin_convertvector(*reinterpret_cast<const Scalar4*>(from + 3 * S), Double4);
   const Double4 t0 = S2KF_SHUFFLE4(r0, r1, 0, 4, 2, 6), t1 = S2KF_SHUFFLE4(r0, r1, 1, 5, 3, 7);
   const Double4 t2 = S2KF_SHUFFLE4(r2, r3, 0, 4, 2, 6), t3 = S2KF_SHUFFLE4(r2, r3, 1, 5, 3, 7);
-  *reinterpret_cast<Unaligned4*>(to) = S2KF_SHUFFLE4(t0, t2, 0, 1, 4, 5);
-  *reinterpret_cast<Unaligned4*>(to + stride) = S2KF_SHUFFLE4(t1, t3, 0, 1, 4, 5);
-  *reinterpret_cast<Unaligned4*>(to + 2 * stride) = S2KF_SHUFFLE4(t0, t2, 2, 3, 6, 7);
-  *reinterpret_cast<Unaligned4*>(to + 3 * stride) = S2KF_SHUFFLE4(t1, t3, 2, 3, 6, 7);
+  *reinterpret_cast<Unaligned4*>(to) = S2KF_SHUFFLE4(t0, t2, 0, 1, 4, 5) + offset;
+  *reinterpret_cast<Unaligned4*>(to + stride) = S2KF_SHUFFLE4(t1, t3, 0, 1, 4, 5) + offset;
+  *reinterpret_cast<Unaligned4*>(to + 2 * stride) = S2KF_SHUFFLE4(t0, t2, 2, 3, 6, 7) + offset;
+  *reinterpret_cast<Unaligned4*>(to + 3 * stride) = S2KF_SHUFFLE4(t1, t3, 2, 3, 6, 7) + offset;
 }
 #undef S2KF_SHUFFLE4
 }  // namespace detail
 
-/// markers.col(i) = the i-th pose's ws.markers (rows x0, y0, z0, x1, ...), for the first n poses
-/// of a block, by code for instruction set `Set`. A transpose, eight rows at a time, so the source
-/// arrays and the destination columns in use stay in the L1 cache (row by row, or column by
-/// column, they do not); with AVX2 and AVX-512 in 4 x 4 tiles (SSE2 has no 4-wide registers).
+/// markers.col(i) = the i-th pose's ws.markers (rows x0, y0, z0, x1, ...), plus `offset` (one number
+/// per row, or none), for the first n poses of a block, by code for instruction set `Set`. A
+/// transpose, eight rows at a time, so the source arrays and the destination columns in use stay
+/// in the L1 cache (row by row, or column by column, they do not); with AVX2 and AVX-512 in 4 x 4
+/// tiles (SSE2 has no 4-wide registers).
 template <InstructionSet Set = compiled_instruction_set(), typename Scalar>
 S2KF_ALWAYS_INLINE void copy_markers_out(const BasicForwardKinematicsWorkspace<Scalar>& ws, Eigen::Index n,
-                                         double* markers, Eigen::Index rows, Eigen::Index stride) {
+                                         double* markers, Eigen::Index rows, Eigen::Index stride,
+                                         const double* offset = nullptr) {
   constexpr Eigen::Index S = BasicForwardKinematicsWorkspace<Scalar>::kStride, kRows = 8;
   const Scalar* from = ws.markers.data();
+  const auto add = [offset](Eigen::Index row)
+                       S2KF_ALWAYS_INLINE_LAMBDA { return offset != nullptr ? offset[row] : 0.0; };
   Eigen::Index n4 = 0;  // poses done in tiles
   if constexpr (Set >= InstructionSet::avx2) n4 = n - n % 4;
   for (Eigen::Index top = 0; top < rows; top += kRows) {
@@ -265,15 +331,19 @@ S2KF_ALWAYS_INLINE void copy_markers_out(const BasicForwardKinematicsWorkspace<S
       const Eigen::Index r4 = r - r % 4;
       for (Eigen::Index i = 0; i < n4; i += 4) {
         double* to = markers + i * stride + top;
-        for (Eigen::Index k = 0; k < r4; k += 4)
-          detail::transpose_four<Scalar, S>(from + (top + k) * S + i, to + k, stride);
+        for (Eigen::Index k = 0; k < r4; k += 4) {
+          const detail::Double4 rows_offset{add(top + k), add(top + k + 1), add(top + k + 2),
+                                            add(top + k + 3)};
+          detail::transpose_four<Scalar, S>(from + (top + k) * S + i, to + k, stride, rows_offset);
+        }
         for (Eigen::Index k = r4; k < r; ++k)
-          for (Eigen::Index j = 0; j < 4; ++j) to[j * stride + k] = from[(top + k) * S + i + j];
+          for (Eigen::Index j = 0; j < 4; ++j)
+            to[j * stride + k] = from[(top + k) * S + i + j] + add(top + k);
       }
     }
     for (Eigen::Index i = n4; i < n; ++i) {
       double* to = markers + i * stride + top;
-      for (Eigen::Index k = 0; k < r; ++k) to[k] = from[(top + k) * S + i];
+      for (Eigen::Index k = 0; k < r; ++k) to[k] = from[(top + k) * S + i] + add(top + k);
     }
   }
 }

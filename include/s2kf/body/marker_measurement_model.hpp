@@ -100,6 +100,20 @@ class MarkerMeasurementModel {
   void set_single_precision(bool single) { single_precision_ = single; }
   bool single_precision() const { return single_precision_; }
 
+  /// The predictions of a symmetric sample set, whose columns are the mean `origin_count` times,
+  /// then mean + H and mean - H (H = half_deviations, one column per pair); `states` holds those
+  /// columns. With set_single_precision_deviations on (and set_single_precision off), the mean
+  /// pose is evaluated once in double and each sample as its deviation from it in float
+  /// (forward_kinematics_deviation_block): float rounds a deviation relative to its own size, not
+  /// to the lab coordinates', and what the sample shares with the mean is not recomputed. Else
+  /// the same as operator()(states, predictions). The filter calls it when the model has it.
+  void evaluate_symmetric(const Eigen::Ref<const Eigen::MatrixXd>& states,
+                          const Eigen::Ref<const Eigen::VectorXd>& mean,
+                          const Eigen::Ref<const Eigen::MatrixXd>& half_deviations, Eigen::Index origin_count,
+                          Eigen::Ref<Eigen::MatrixXd> predictions);
+  void set_single_precision_deviations(bool single) { single_precision_deviations_ = single; }
+  bool single_precision_deviations() const { return single_precision_deviations_; }
+
  private:
   static constexpr Eigen::Index S = ForwardKinematicsWorkspace::kStride;  // spacing of the arrays
 
@@ -133,6 +147,143 @@ class MarkerMeasurementModel {
         copy_markers_out<decltype(tag)::value>(ws, n, predictions.data() + start * predictions.outerStride(),
                                                predictions.rows(), predictions.outerStride());
       });
+    }
+  }
+
+  // evaluate_symmetric with float deviations: the mean pose in double (ws_mean_), then every block
+  // of samples as deviations from it (ws_deviation_).
+  void evaluate_deviations(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                           const Eigen::Ref<const Eigen::MatrixXd>& half, Eigen::Index origin_count,
+                           Eigen::Ref<Eigen::MatrixXd> predictions) {
+    const Eigen::Index count = predictions.cols(), h = half.cols(), rows = predictions.rows();
+    const int joint_count = model_.joint_count(), frame_count = model_.frame_count();
+    mean_prediction_.resize(rows);
+    evaluate(mean, Eigen::Map<Eigen::MatrixXd>(mean_prediction_.data(), rows, 1), ws_mean_,
+             orientation_mean_);
+    prepare_mean_constants(mean, frame_count, joint_count);
+    ws_deviation_.prepare_deviations(model_, static_cast<Eigen::Index>(selected_.size()));
+    ws_.prepare(model_,
+                static_cast<Eigen::Index>(selected_.size()));  // the samples' root rotations in double
+    if (orientation_buffer_.size() != static_cast<std::size_t>(9 * S)) orientation_buffer_.assign(9 * S, 0.0);
+    const Eigen::Index B = ForwardKinematicsWorkspace::block_size(count);
+    eigen_assert(half.innerStride() == 1 && predictions.innerStride() == 1);
+    const InstructionSet set = active_instruction_set();
+    for (Eigen::Index start = 0; start < count; start += B) {
+      const Eigen::Index n = std::min(B, count - start);
+      run_with_instruction_set(set, [&](auto tag) S2KF_ALWAYS_INLINE_LAMBDA {
+        BasicForwardKinematicsWorkspace<float>& ws = ws_deviation_;
+        double* o = orientation_buffer_.data();
+        for (Eigen::Index i = 0; i < n; ++i) {
+          // Sample start + i: the mean, mean + H(:, k) or mean - H(:, k).
+          const Eigen::Index g = start + i;
+          const double sign = g < origin_count ? 0.0 : (g < origin_count + h ? 1.0 : -1.0);
+          const Eigen::Index k = g < origin_count ? 0 : (g - origin_count) % h;
+          const double* d = half.data() + k * half.outerStride();
+          for (int r = 0; r < 3; ++r) ws.root_position[r * S + i] = static_cast<float>(sign * d[r]);
+          for (int a = 0; a < 3; ++a) o[a * S + i] = mean(3 + a) + sign * d[3 + a];
+          for (int j = 0; j < joint_count; ++j)
+            ws.angles[j * S + i] = static_cast<float>(0.5 * sign * d[6 + j]);
+        }
+        // The root's rotation in double, as evaluate() forms it, minus the mean pose's: exact to
+        // double rounding before it is rounded to float.
+        if (orientation_ == OrientationParameterization::roll_pitch_yaw)
+          stage_rpy_rotations(n, ws_, o);
+        else
+          stage_local_rotations(n, ws_, o);
+        for (int a = 0; a < 9; ++a) {
+          const double mean_entry = ws_mean_.root_rotation[a * S];
+          const double* full = ws_.root_rotation.data() + a * S;
+          float* deviation = ws.root_rotation.data() + a * S;
+          for (Eigen::Index i = 0; i < n; ++i) deviation[i] = static_cast<float>(full[i] - mean_entry);
+        }
+        // One block holds every pair: the - half's sines mirror the + half's (see below).
+        stage_joint_deviations(n, ws, n == count ? origin_count : -1, h);
+        forward_kinematics_deviation_block(model_, selected_, ws, mean_rotation_.data(), n);
+        copy_markers_out<decltype(tag)::value>(ws, n, predictions.data() + start * predictions.outerStride(),
+                                               rows, predictions.outerStride(), mean_prediction_.data());
+      });
+    }
+  }
+
+  // From the mean pose's evaluation (ws_mean_): its frames' rotations in float and, per joint,
+  // sin and cos of its parameter Theta and of its angle theta, and half its range.
+  void prepare_mean_constants(const Eigen::Ref<const Eigen::VectorXd>& mean, int frame_count,
+                              int joint_count) {
+    mean_rotation_.resize(9 * static_cast<std::size_t>(frame_count));
+    for (int f = 0; f < frame_count; ++f)
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+          mean_rotation_[static_cast<std::size_t>(9 * f + 3 * c + r)] =
+              static_cast<float>(ws_mean_.rotation[static_cast<std::size_t>(
+                  (9 * ws_mean_.column_frame[3 * f + c] + 3 * c + r) * S)]);
+    joint_constants_.resize(5 * static_cast<std::size_t>(joint_count));
+    for (int j = 0; j < joint_count; ++j) {
+      float* constants = joint_constants_.data() + 5 * j;
+      const double parameter = mean(6 + j);
+      constants[0] = static_cast<float>(std::sin(parameter));
+      constants[1] = static_cast<float>(std::cos(parameter));
+      constants[2] = static_cast<float>(ws_mean_.sin_q[static_cast<std::size_t>(j * S)]);
+      constants[3] = static_cast<float>(ws_mean_.cos_q[static_cast<std::size_t>(j * S)]);
+      constants[4] =
+          static_cast<float>(0.25 * (joints_.upper(j) - joints_.lower(j)));  // a quarter: see below
+    }
+  }
+
+  // ws.angles holds half of each sample's parameter deviation d; writes the sine and cosine of
+  // its angle and their deviations from the mean's, with sin(x + d) - sin x = cos x sin d -
+  // sin x (1 - cos d), sin d = 2 sin(d/2) cos(d/2) and 1 - cos d = 2 sin^2(d/2): no difference of
+  // two nearly equal numbers, so each stays precise relative to its own size. With origin >= 0
+  // the block is the whole set (origin poses, h pairs' + halves, their - halves), and the sine and
+  // cosine of -d/2 are those of d/2, one negated.
+  S2KF_ALWAYS_INLINE void stage_joint_deviations(Eigen::Index n, BasicForwardKinematicsWorkspace<float>& ws,
+                                                 Eigen::Index origin, Eigen::Index h) {
+    for (int j = 0; j < model_.joint_count(); ++j) {
+      float* q = ws.array(ws.angles, j);
+      float* s = ws.array(ws.sin_q, j);
+      float* c = ws.array(ws.cos_q, j);
+      float* ds = ws.array(ws.delta_sin_q, j);
+      float* dc = ws.array(ws.delta_cos_q, j);
+      const float* constants = joint_constants_.data() + 5 * j;
+      const float sin_parameter = constants[0], cos_parameter = constants[1];
+      const float sin_angle = constants[2], cos_angle = constants[3], quarter_range = constants[4];
+      if (joints_.upper(j) == joints_.lower(j)) {
+        std::fill(ds, ds + n, 0.0f);
+        std::fill(dc, dc + n, 0.0f);
+        std::fill(s, s + n, sin_angle);
+        std::fill(c, c + n, cos_angle);
+        continue;
+      }
+      if (origin >= 0) {
+        vector_sincos(q + origin, s + origin, c + origin, h);
+        std::fill(s, s + origin, 0.0f);
+        std::fill(c, c + origin, 1.0f);
+        for (Eigen::Index k = 0; k < h; ++k) {
+          s[origin + h + k] = -s[origin + k];
+          c[origin + h + k] = c[origin + k];
+        }
+      } else {
+        vector_sincos(q, s, c, n);
+      }
+      // theta - theta_mean = half range (sin Theta - sin Theta_mean); q receives half of it.
+      for (Eigen::Index i = 0; i < n; ++i)
+        q[i] = quarter_range * (cos_parameter * (2.0f * s[i] * c[i]) - sin_parameter * (2.0f * s[i] * s[i]));
+      vector_sincos(q, s, c, n);
+      add_angle_deviations(s, c, ds, dc, sin_angle, cos_angle, n);
+    }
+  }
+
+  // s, c: sine and cosine of half of each sample's angle deviation; out: the deviations of the
+  // angle's sine and cosine (ds, dc) and the sine and cosine themselves (s, c). Parameters, so that
+  // the compiler takes their __restrict and vectorises without overlap checks.
+  static S2KF_ALWAYS_INLINE void add_angle_deviations(float* __restrict s, float* __restrict c,
+                                                      float* __restrict ds, float* __restrict dc,
+                                                      float sin_angle, float cos_angle, Eigen::Index n) {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const float sine = 2.0f * s[i] * c[i], versine = 2.0f * s[i] * s[i];
+      ds[i] = cos_angle * sine - sin_angle * versine;
+      dc[i] = -sin_angle * sine - cos_angle * versine;
+      s[i] = sin_angle + ds[i];
+      c[i] = cos_angle + dc[i];
     }
   }
 
@@ -232,6 +383,14 @@ class MarkerMeasurementModel {
   bool single_precision_ = false;
   BasicForwardKinematicsWorkspace<float> ws_single_;
   std::vector<float> orientation_single_;
+  // evaluate_symmetric's float deviations: the mean pose's evaluation and predictions, its frames'
+  // rotations and per-joint constants (prepare_mean_constants), and the samples' workspace.
+  bool single_precision_deviations_ = false;
+  ForwardKinematicsWorkspace ws_mean_;
+  std::vector<double> orientation_mean_;
+  Eigen::VectorXd mean_prediction_;
+  std::vector<float> mean_rotation_, joint_constants_;
+  BasicForwardKinematicsWorkspace<float> ws_deviation_;
 };
 
 /// Diagonal measurement noise R (3 M x 3 M) with the same variance (mm^2) for every coordinate.

@@ -55,4 +55,27 @@ S2KF_INLINE void MarkerMeasurementModel::operator()(const Eigen::Ref<const Eigen
     evaluate(states, predictions, ws_, orientation_buffer_);
 }
 
+S2KF_INLINE void MarkerMeasurementModel::evaluate_symmetric(
+    const Eigen::Ref<const Eigen::MatrixXd>& states, const Eigen::Ref<const Eigen::VectorXd>& mean,
+    const Eigen::Ref<const Eigen::MatrixXd>& half_deviations, Eigen::Index origin_count,
+    Eigen::Ref<Eigen::MatrixXd> predictions) {
+  const Eigen::Index count = states.cols();
+  if (!single_precision_deviations_ || single_precision_ || half_deviations.cols() == 0) {
+    (*this)(states, predictions);
+    return;
+  }
+  check_state_size(states.rows(), "evaluate_symmetric");
+  if (mean.size() != states.rows() || half_deviations.rows() != states.rows() || origin_count < 0 ||
+      origin_count + 2 * half_deviations.cols() != count)
+    throw DimensionError(
+        "MarkerMeasurementModel::evaluate_symmetric: the mean and the half deviations do not "
+        "describe the " +
+        std::to_string(count) + " samples");
+  if (predictions.rows() != measurement_dimension() || predictions.cols() != count)
+    throw DimensionError("MarkerMeasurementModel: predictions must be " +
+                         std::to_string(measurement_dimension()) + " x " + std::to_string(count) + ", got " +
+                         std::to_string(predictions.rows()) + " x " + std::to_string(predictions.cols()));
+  evaluate_deviations(mean, half_deviations, origin_count, predictions);
+}
+
 }  // namespace s2kf::body

@@ -32,7 +32,9 @@ S2KF_ALWAYS_INLINE void vector_sincos(const double* x, double* s, double* c, Eig
                    C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
                    C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
   constexpr double kLimit = 1e5;  // k * kPio2Part1 stays exact while |k| < 2^20
-  double large = 0;               // count of arguments for the scalar fallback (NaN included)
+  // Count of arguments for the scalar fallback (NaN included): an integer, whose sum the compiler
+  // may reorder into vector lanes (a floating-point sum it must add in order, lane by lane).
+  std::int64_t large = 0;
   for (Eigen::Index i = 0; i < n; ++i) {
     const double xi = x[i];
     const double shifted = xi * kTwoOverPi + kRoundMagic;  // its last two bits are k mod 4
@@ -56,7 +58,7 @@ S2KF_ALWAYS_INLINE void vector_sincos(const double* x, double* s, double* c, Eig
     const std::uint64_t cosine = (((sin_bits ^ kSignBit) & odd) | (cos_bits & ~odd)) ^ flip;
     std::memcpy(s + i, &sine, sizeof sine);
     std::memcpy(c + i, &cosine, sizeof cosine);
-    large += std::abs(xi) <= kLimit ? 0.0 : 1.0;
+    large += std::abs(xi) <= kLimit ? 0 : 1;
   }
   if (large == 0) return;
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -78,7 +80,7 @@ S2KF_ALWAYS_INLINE void vector_sincos(const float* x, float* s, float* c, Eigen:
   constexpr float S1 = -1.6666654611e-1f, S2 = 8.3321608736e-3f, S3 = -1.9515295891e-4f;
   constexpr float C1 = 4.166664568298827e-2f, C2 = -1.388731625493765e-3f, C3 = 2.443315711809948e-5f;
   constexpr float kLimit = 8192.0f;
-  float large = 0;
+  std::int32_t large = 0;  // an integer, as in the double version
   for (Eigen::Index i = 0; i < n; ++i) {
     const float xi = x[i];
     const float k = (xi * kTwoOverPi + kRoundMagic) - kRoundMagic;
@@ -93,7 +95,7 @@ S2KF_ALWAYS_INLINE void vector_sincos(const float* x, float* s, float* c, Eigen:
     const float sign = 1.0f - 2.0f * high;
     s[i] = sign * ((1.0f - odd) * sin_r + odd * cos_r);
     c[i] = sign * ((1.0f - odd) * cos_r - odd * sin_r);
-    large += std::abs(xi) <= kLimit ? 0.0f : 1.0f;
+    large += std::abs(xi) <= kLimit ? 0 : 1;
   }
   if (large == 0) return;
   for (Eigen::Index i = 0; i < n; ++i) {

@@ -484,11 +484,28 @@ class FilterCore {
 
 }  // namespace detail
 
+namespace detail {
+/// Whether a measurement model has `evaluate_symmetric(states, mean, half_deviations, origin_count,
+/// out)` (see SmartSamplingKalmanFilter).
+template <typename Model, typename = void>
+struct EvaluatesSymmetricSets : std::false_type {};
+template <typename Model>
+struct EvaluatesSymmetricSets<
+    Model, std::void_t<decltype(std::declval<Model&>().evaluate_symmetric(
+               std::declval<const Eigen::MatrixXd&>(), std::declval<const Eigen::VectorXd&>(),
+               std::declval<const Eigen::MatrixXd&>(), Eigen::Index{}, std::declval<Eigen::MatrixXd&>()))>>
+    : std::true_type {};
+}  // namespace detail
+
 /// A measurement model is any callable `h(const Eigen::MatrixXd& states, Eigen::MatrixXd& out)`
 /// that maps a block of state samples (state dimension x L, one sample per column) to the block of
 /// predicted measurements (measurement dimension x L; `out` arrives sized). A system model has the
 /// same shape with the state dimension on both sides. Evaluating all samples in one call lets a
-/// model vectorise across samples.
+/// model vectorise across samples. A model may also have `evaluate_symmetric(states, mean,
+/// half_deviations, origin_count, out)`: for a symmetric sample set (origin_count columns at the
+/// mean, then mean + H and mean - H) the update calls it instead, with H = half_deviations, so the
+/// model can evaluate the samples as deviations from the mean
+/// (body::MarkerMeasurementModel::evaluate_symmetric).
 ///
 /// The filter owns scratch buffers, so after the first step with the largest sizes, update() and
 /// predict() do not allocate (for the non-iterated update with positive weights).
@@ -547,15 +564,25 @@ class SmartSamplingKalmanFilter : public detail::FilterCore {
     if (!result.ok()) return result;
     if (options.iterations > 1) return iterated_update(state, h, y, r, options, result);
     if ((result.status = draw_samples(state.mean, state.covariance)) != FilterStatus::ok) return result;
-    if ((result.status = evaluate_observed(h, y.size())) != FilterStatus::ok) return result;
+    if ((result.status = evaluate_observed(h, y.size(), state.mean)) != FilterStatus::ok) return result;
     return finish_update(state.mean, state.covariance, y, r, options, result);
   }
 
  private:
-  /// Runs h on the current samples, keeps the observed rows as deviations from their weighted mean.
+  /// Runs h on the current samples (drawn around `mean`), keeps the observed rows as deviations
+  /// from their weighted mean.
   template <typename MeasurementModel>
-  FilterStatus evaluate_observed(MeasurementModel& h, Eigen::Index m) {
+  FilterStatus evaluate_observed(MeasurementModel& h, Eigen::Index m,
+                                 const Eigen::Ref<const Eigen::VectorXd>& mean) {
     Eigen::MatrixXd& predictions = prepare_predictions(m);
+    if constexpr (detail::EvaluatesSymmetricSets<std::remove_reference_t<MeasurementModel>>::value) {
+      if (symmetric_ && !keep_full_deviations_) {  // half_deviation_ holds S z of the + half, unscaled
+        h.evaluate_symmetric(static_cast<const Eigen::MatrixXd&>(x_), mean,
+                             static_cast<const Eigen::MatrixXd&>(half_deviation_), origin_count_,
+                             predictions);
+        return gather_observed(m);
+      }
+    }
     h(static_cast<const Eigen::MatrixXd&>(x_), predictions);
     return gather_observed(m);
   }
@@ -574,7 +601,7 @@ class SmartSamplingKalmanFilter : public detail::FilterCore {
     for (int pass = 0; pass < options.iterations; ++pass) {
       if ((result.status = draw_samples(iteration.mean, iteration.covariance)) != FilterStatus::ok)
         return result;
-      if ((result.status = evaluate_observed(h, y.size())) != FilterStatus::ok) return result;
+      if ((result.status = evaluate_observed(h, y.size(), iteration.mean)) != FilterStatus::ok) return result;
       if ((result.status = iteration_pass(state.mean, state.covariance, iteration, result.nis)) !=
           FilterStatus::ok)
         return result;

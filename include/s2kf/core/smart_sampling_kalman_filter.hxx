@@ -5,6 +5,8 @@
 
 #include <s2kf/core/smart_sampling_kalman_filter.hpp>
 
+#include <s2kf/core/instruction_set.hpp>
+
 namespace s2kf {
 namespace detail {
 
@@ -512,20 +514,27 @@ S2KF_INLINE FilterStatus FilterCore::gather_observed(Eigen::Index m) {
   auto y_mean = y_mean_.head(mo);
   y_mean.setZero();
   // Gather the observed rows a column at a time (both matrices are column-major) and add the
-  // column to the weighted mean while it is in cache.
+  // column to the weighted mean while it is in cache: plain loops compiled for the processor's
+  // instruction set (the rest of the filter is compiled for the build's baseline).
   const Eigen::Index* index = index_.data();
-  for (Eigen::Index i = 0; i < count; ++i) {
-    auto to = y_dev_.col(i).head(mo);
-    if (direct_) {
-      // already there
-    } else if (mo == m) {
-      to = predictions_.col(i);
-    } else {
-      const double* from = predictions_.col(i).data();
-      for (Eigen::Index k = 0; k < mo; ++k) to(k) = from[index[k]];
+  const double* weights = samples_.weights.data();
+  double* mean = y_mean.data();
+  const bool all_rows = mo == m;
+  run_with_instruction_set(active_instruction_set(), [&](auto) S2KF_ALWAYS_INLINE_LAMBDA {
+    for (Eigen::Index i = 0; i < count; ++i) {
+      double* to = y_dev_.data() + i * y_dev_.outerStride();
+      const double* from = predictions_.data() + i * predictions_.outerStride();
+      if (direct_) {
+        // already there
+      } else if (all_rows) {
+        std::copy_n(from, mo, to);
+      } else {
+        for (Eigen::Index k = 0; k < mo; ++k) to[k] = from[index[k]];
+      }
+      const double w = weights[i];
+      for (Eigen::Index k = 0; k < mo; ++k) mean[k] += w * to[k];
     }
-    y_mean += samples_.weights(i) * to;
-  }
+  });
   // A NaN or infinite prediction makes its row's weighted mean NaN or infinite whatever the
   // weight (0 * inf is NaN), so checking the mean checks every prediction.
   if (!y_mean.allFinite()) return FilterStatus::non_finite_model_output;
@@ -612,16 +621,27 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
     auto spread_f = single_buffer(component_spread_f_, mo, 1).col(0);
     auto pair_difference_f = single_buffer(pair_difference_f_, mo, symmetric_ ? h : 0);
     spread_f.setZero();
-    const auto y_mean = y_mean_.head(mo);
-    for (Eigen::Index i = 0; i < count; ++i) {
-      const double scale = sqrt_weights_(equal_weights_ ? 0 : i);
-      if (centred_)
-        y_dev_f.col(i) = (scale * y_dev.col(i)).template cast<float>();
-      else
-        y_dev_f.col(i) = (scale * (y_dev.col(i) - y_mean)).template cast<float>();
-      spread_f += y_dev_f.col(i).cwiseAbs2();
-      if (symmetric_ && i >= o + h) pair_difference_f.col(i - o - h) = y_dev_f.col(i - h) - y_dev_f.col(i);
-    }
+    // Plain loops compiled for the processor's instruction set, as in gather_observed.
+    const double* mean = y_mean_.data();
+    float* spread = spread_f.data();
+    const bool centred = centred_, pairs = symmetric_;
+    run_with_instruction_set(active_instruction_set(), [&](auto) S2KF_ALWAYS_INLINE_LAMBDA {
+      for (Eigen::Index i = 0; i < count; ++i) {
+        const double scale = sqrt_weights_(equal_weights_ ? 0 : i);
+        const double* from = y_dev.data() + i * y_dev.outerStride();
+        float* to = y_dev_f.data() + i * y_dev_f.outerStride();
+        if (centred)
+          for (Eigen::Index k = 0; k < mo; ++k) to[k] = static_cast<float>(scale * from[k]);
+        else
+          for (Eigen::Index k = 0; k < mo; ++k) to[k] = static_cast<float>(scale * (from[k] - mean[k]));
+        for (Eigen::Index k = 0; k < mo; ++k) spread[k] += to[k] * to[k];
+        if (pairs && i >= o + h) {
+          const float* plus = y_dev_f.data() + (i - h) * y_dev_f.outerStride();
+          float* difference = pair_difference_f.data() + (i - o - h) * pair_difference_f.outerStride();
+          for (Eigen::Index k = 0; k < mo; ++k) difference[k] = plus[k] - to[k];
+        }
+      }
+    });
     component_spread_.head(mo) = spread_f.template cast<double>();
     auto regression_f = single_buffer(regression_f_, n, mo);
     regression_f.setZero();

@@ -42,6 +42,7 @@ S2KF_INLINE Tracker::Tracker(body::BodyModel model, body::MarkerMapping mapping,
   }
   measurement_model_.select_markers(used_markers_);
   measurement_model_.set_single_precision(options_.single_precision_kinematics);  // not the reported markers
+  measurement_model_.set_single_precision_deviations(options_.single_precision_kinematic_deviations);
   const int n = state_dimension();
   const double dt = 1.0 / rate_hz_;
   const int d = motion_state_dimension();
