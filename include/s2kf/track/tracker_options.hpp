@@ -115,7 +115,7 @@ struct TrackerOptions {
   /// (MarkerMeasurementModel::set_single_precision_deviations): the mean pose in double, each
   /// sample's difference from it in float, which rounds it relative to its own size (about 1e-7
   /// of it, as the single-precision moments round it anyway) and computes the sine and cosine in
-  /// float: the model in 63 instead of 89 us at L = 301 with AVX2 (docs/benchmarks.md), the same
+  /// float: the model in 62 instead of 89 us at L = 301 with AVX2 (docs/benchmarks.md), the same
   /// motion to rounding.
   bool single_precision_kinematic_deviations = true;
 
