@@ -998,6 +998,7 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
     return std::find(anchored.begin(), anchored.end(), body::segment_of_frame(c.base, frame)) !=
            anchored.end();
   };
+  const std::vector<int> template_frame_of = a.frame_of;  // after the topology check
   for (int round = 0; round < options.max_rounds; ++round) {
     double estimated = a.height;
     a.spread = track_and_measure(c.recording, c.points, a.set, round == 0 ? a.height : 0.0, c.samples,
@@ -1025,6 +1026,13 @@ inline void reassignment_rounds(const InferenceContext& c, Attempt& a, const std
       const double own = a.spread.spread(row, a.frame_of[i]);
       if (std::isfinite(own) && (own < options.rigid_spread_mm || !(best_spread < options.move_ratio * own)))
         best_frame = a.frame_of[i];
+      // Off the template's frame, back to it where it now carries the marker rigidly and steadier: the
+      // round that moved it had lost the segment's tracking (an arm for a round), not found its place.
+      const int on_template = template_frame_of[i];
+      const double template_spread = a.spread.spread(row, on_template);
+      if (a.frame_of[i] != on_template && template_spread < options.rigid_spread_mm &&
+          template_spread < std::min(own, a.spread.spread(row, best_frame)))
+        best_frame = on_template;
       // Its name decides where the motion does not separate the named segment from the steadiest.
       const std::string named = named_marker_segment(c.label(c.points[i]));
       if (!named.empty() && body::segment_of_frame(c.base, best_frame) != named) {
