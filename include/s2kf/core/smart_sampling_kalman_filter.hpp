@@ -482,9 +482,6 @@ class FilterCore {
   Eigen::MatrixXd unread_basis_, unread_factor_, unread_whitened_, unread_coefficients_;
 };
 
-}  // namespace detail
-
-namespace detail {
 /// Whether a measurement model has `evaluate_symmetric(states, mean, half_deviations, origin_count,
 /// out)` (see SmartSamplingKalmanFilter).
 template <typename Model, typename = void>
