@@ -288,6 +288,17 @@ TEST(SubjectCalibration, AdjustsTheSubjectAtGivenPoses) {
       std::invalid_argument);
   EXPECT_THROW(calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, {}, options),
                std::invalid_argument);
+  // So are per-marker options of another length (they are read by marker index).
+  calibration::CalibrationOptions short_weights = options;
+  short_weights.marker_weight.assign(3, 1.0);
+  EXPECT_THROW(
+      calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, poses, short_weights),
+      std::invalid_argument);
+  calibration::CalibrationOptions short_flags = options;
+  short_flags.placed_by_motion.assign(3, true);
+  EXPECT_THROW(
+      calibration::adjust_subject_at_poses(model, mapping, fast_options(), s.recording, poses, short_flags),
+      std::invalid_argument);
 }
 
 // A subject whose markers are only misplaced: no soft tissue and the model's bone lengths (a static

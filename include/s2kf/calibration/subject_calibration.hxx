@@ -7,6 +7,23 @@
 #include <s2kf/calibration/subject_calibration.hpp>
 
 namespace s2kf::calibration {
+
+namespace detail {
+/// The inputs given per model marker (the mapping, options.marker_weight and
+/// options.placed_by_motion) have one entry for each of the model's markers; BundleAdjustment
+/// reads them by marker index.
+inline void check_per_marker_inputs(const body::BodyModel& model, const body::MarkerMapping& mapping,
+                                    const CalibrationOptions& options) {
+  const auto markers = static_cast<std::size_t>(model.marker_count());
+  if (mapping.point_of_marker.size() != markers)
+    throw std::invalid_argument("calibration: the marker mapping does not fit the body model");
+  if (!options.marker_weight.empty() && options.marker_weight.size() != markers)
+    throw std::invalid_argument("calibration: one weight per model marker is needed");
+  if (!options.placed_by_motion.empty() && options.placed_by_motion.size() != markers)
+    throw std::invalid_argument("calibration: one placed-by-motion flag per model marker is needed");
+}
+}  // namespace detail
+
 S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
                                                  const body::MarkerMapping& mapping,
                                                  const track::TrackerOptions& tracker_options,
@@ -18,14 +35,7 @@ S2KF_INLINE SubjectCalibration calibrate_subject(const body::BodyModel& model,
       recording.positions.rows() != 3 * recording.point_count())
     throw std::invalid_argument("calibration: one visibility flag per point and frame is needed");
   if (recording.frame_count() == 0) throw std::invalid_argument("calibration: the recording has no frame");
-  if (mapping.point_of_marker.size() != static_cast<std::size_t>(model.marker_count()))
-    throw std::invalid_argument("calibration: the marker mapping does not fit the body model");
-  if (!options.marker_weight.empty() &&
-      options.marker_weight.size() != static_cast<std::size_t>(model.marker_count()))
-    throw std::invalid_argument("calibration: one weight per model marker is needed");
-  if (!options.placed_by_motion.empty() &&
-      options.placed_by_motion.size() != static_cast<std::size_t>(model.marker_count()))
-    throw std::invalid_argument("calibration: one placed-by-motion flag per model marker is needed");
+  detail::check_per_marker_inputs(model, mapping, options);
 
   const body::BodyModel start = model;
   SubjectCalibration result;
@@ -126,11 +136,7 @@ S2KF_INLINE SubjectCalibration adjust_subject_at_poses(const body::BodyModel& mo
                                                        const CalibrationOptions& options) {
   options.validate();
   model.validate();
-  if (mapping.point_of_marker.size() != static_cast<std::size_t>(model.marker_count()))
-    throw std::invalid_argument("calibration: the marker mapping does not fit the body model");
-  if (!options.placed_by_motion.empty() &&
-      options.placed_by_motion.size() != static_cast<std::size_t>(model.marker_count()))
-    throw std::invalid_argument("calibration: one placed-by-motion flag per model marker is needed");
+  detail::check_per_marker_inputs(model, mapping, options);
   detail::BundleAdjustment adjustment(model, mapping, recording, options,
                                       tracker_options.marker_noise_mm * tracker_options.marker_noise_mm);
   const std::vector<int>& used = adjustment.used();
