@@ -293,6 +293,14 @@ class MarkerMeasurementModel {
                            std::to_string(n) + ", expected " + std::to_string(state_dimension()));
   }
 
+  void check_predictions_size(const Eigen::Ref<Eigen::MatrixXd>& predictions, Eigen::Index count) const {
+    if (predictions.rows() != measurement_dimension() || predictions.cols() != count)
+      throw DimensionError("MarkerMeasurementModel: predictions must be " +
+                           std::to_string(measurement_dimension()) + " x " + std::to_string(count) +
+                           ", got " + std::to_string(predictions.rows()) + " x " +
+                           std::to_string(predictions.cols()));
+  }
+
   // orientation_buffer_ holds roll, pitch, yaw in arrays 0..2; arrays 3..8 receive sines and cosines.
   template <typename Scalar>
   S2KF_ALWAYS_INLINE void stage_rpy_rotations(Eigen::Index n, BasicForwardKinematicsWorkspace<Scalar>& ws,

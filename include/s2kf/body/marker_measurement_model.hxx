@@ -45,10 +45,7 @@ S2KF_INLINE void MarkerMeasurementModel::operator()(const Eigen::Ref<const Eigen
                                                     Eigen::Ref<Eigen::MatrixXd> predictions) {
   const Eigen::Index count = states.cols();
   check_state_size(states.rows(), "operator()");
-  if (predictions.rows() != measurement_dimension() || predictions.cols() != count)
-    throw DimensionError("MarkerMeasurementModel: predictions must be " +
-                         std::to_string(measurement_dimension()) + " x " + std::to_string(count) + ", got " +
-                         std::to_string(predictions.rows()) + " x " + std::to_string(predictions.cols()));
+  check_predictions_size(predictions, count);
   if (single_precision_)
     evaluate(states, predictions, ws_single_, orientation_single_);
   else
@@ -71,10 +68,7 @@ S2KF_INLINE void MarkerMeasurementModel::evaluate_symmetric(
         "MarkerMeasurementModel::evaluate_symmetric: the mean and the half deviations do not "
         "describe the " +
         std::to_string(count) + " samples");
-  if (predictions.rows() != measurement_dimension() || predictions.cols() != count)
-    throw DimensionError("MarkerMeasurementModel: predictions must be " +
-                         std::to_string(measurement_dimension()) + " x " + std::to_string(count) + ", got " +
-                         std::to_string(predictions.rows()) + " x " + std::to_string(predictions.cols()));
+  check_predictions_size(predictions, count);
   evaluate_deviations(mean, half_deviations, origin_count, predictions);
 }
 
