@@ -28,7 +28,11 @@ in degrees, root position RMS and mean marker distance in mm), one per occlusion
     scripts/static-trial-table.py [--s2kf build/s2kf] [--seeds 1,2,3] [--out DIR] [--raw FILE.json]
                                   [--occlusion none,paper] [--extra="--smooth"] [--configs default,track]
                                   [--stance zero|t-pose|a-pose] [--stance-sd DEG] [--static-options="..."]
-                                  [--lead-in] [--known-stance]
+                                  [--lead-in] [--known-stance [--unknown-joints REz,LEz,...]]
+
+--known-stance gives track and alone the stance held (the static trial's true first frame) as
+--static-pose; with --unknown-joints those joints are given at the reference pose instead: what a
+calibration that knows the rest of the stance exactly, and nothing of these joints, reaches.
 """
 import argparse
 import json
@@ -56,6 +60,8 @@ parser.add_argument("--static-options", default="", help="more options for --sta
 parser.add_argument("--known-stance", action="store_true",
                     help="give track and alone the stance held as the reference pose (--static-pose with the "
                          "static trial's _truth.csv): what a stance known exactly would give")
+parser.add_argument("--unknown-joints", default="",
+                    help="with --known-stance: joints given at the reference pose, not as held (REz,LEz)")
 args = parser.parse_args()
 CONFIGS = tuple(args.configs.split(","))
 PAPER_OCCLUSION = "0.005,100"
@@ -113,6 +119,36 @@ def write_lead_in(static_motion, motion, path):
         json.dump(still, f, indent=1)
 
 
+def reference_angle(name):
+    """The reference pose's angle of joint `name` in radians (write_stance's base)."""
+    reference = {"t-pose": 90, "a-pose": 45}.get(args.stance, 0)
+    return math.radians({"LSy": reference, "RSy": -reference}.get(name, 0))
+
+
+def known_stance(seed):
+    """The static trial's true posture as a pose CSV, --unknown-joints put back at the reference pose."""
+    truth = os.path.join(args.out, f"static_{seed}_truth.csv")
+    unknown = [name for name in args.unknown_joints.split(",") if name]
+    if not unknown:
+        return truth
+    with open(truth) as f:
+        lines = f.read().splitlines()
+    header = lines[0].split(",")
+    for name in unknown:
+        if name not in header:
+            sys.exit(f"--unknown-joints: {name} is not a joint of the model")
+    rows = [lines[0]]
+    for line in lines[1:]:
+        cells = line.split(",")
+        for name in unknown:
+            cells[header.index(name)] = repr(reference_angle(name))
+        rows.append(",".join(cells))
+    path = os.path.join(args.out, f"static_{seed}_known.csv")
+    with open(path, "w") as f:
+        f.write("\n".join(rows) + "\n")
+    return path
+
+
 os.makedirs(args.out, exist_ok=True)
 rows = []
 for seed in args.seeds.split(","):
@@ -137,7 +173,7 @@ for seed in args.seeds.split(","):
             run("simulate", "--motion", simulated, "--seed", seed, *extra, *worn, "--out", base + ".c3d")
             static_options = args.static_options.split()
             if args.known_stance:
-                static_options += ["--static-pose", os.path.join(args.out, f"static_{seed}_truth.csv")]
+                static_options += ["--static-pose", known_stance(seed)]
             for config in CONFIGS:
                 option = {"default": [], "no-stretch": ["--no-static-stretch"], "static": ["--subject", subject], "both": ["--markerset", subject],
                           "track": ["--static", static, *static_options],
