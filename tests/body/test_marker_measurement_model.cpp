@@ -210,6 +210,48 @@ TEST(MarkerMeasurementModel, SymmetricEvaluationIsTheOrdinaryOneWithoutFloatDevi
   EXPECT_EQ(allocations.load(), 0);
 }
 
+TEST(MarkerMeasurementModel, TheFiltersFloatDeviationsAreThoseOfEvaluateSymmetric) {
+  // evaluate_symmetric_deviations hands the filter the float deviations that evaluate_symmetric
+  // adds to the mean pose's predictions: the same numbers to the bit, for selected markers in any
+  // order; markers_at (every marker at one state, which the tracker reports and then draws its
+  // samples about) is the model's own evaluation there.
+  const BodyModel body = mmm_body_model(1720);
+  std::mt19937 rng(13);
+  const Eigen::VectorXd mean = random_states(rng, 1, 0.3).col(0);
+  const Eigen::MatrixXf half_f = (0.05 * random_states(rng, 20, 0.3)).cast<float>();
+  const Eigen::MatrixXd half = half_f.cast<double>();
+  const Eigen::MatrixXd states = symmetric_states(mean, half, 1);
+  MarkerMeasurementModel h(body, OrientationParameterization::local_rotation_error), all(h);
+  h.set_reference_orientation(rotation_from_rpy(Eigen::Vector3d(0.2, -0.4, 1.1)));
+  all.set_reference_orientation(h.reference_orientation());
+  h.select_markers({40, 3, 17, 0, 49});
+  Eigen::MatrixXf deviations(15, 41);
+  Eigen::VectorXd mean_prediction(15);
+  EXPECT_FALSE(h.evaluate_symmetric_deviations(mean, half_f, 1, deviations, mean_prediction));  // off
+  h.set_single_precision_deviations(true);
+  Eigen::MatrixXd predictions(15, 41), at_mean(15, 1);
+  h.evaluate_symmetric(states, mean, half, 1, predictions);
+  ASSERT_TRUE(h.evaluate_symmetric_deviations(mean, half_f, 1, deviations, mean_prediction));
+  EXPECT_EQ(Eigen::MatrixXd(deviations.cast<double>().colwise() + mean_prediction), predictions);
+  h(mean, at_mean);
+  EXPECT_LT((mean_prediction - at_mean.col(0)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT(deviations.col(5).cwiseAbs().maxCoeff(), 1.0f);  // deviations of millimetres
+  const Eigen::VectorXd markers = h.markers_at(mean);
+  Eigen::MatrixXd every(150, 1);
+  all(mean, every);
+  EXPECT_EQ(markers, every.col(0));  // the same batched evaluation of every marker
+  EXPECT_THROW(h.evaluate_symmetric_deviations(mean, half_f.leftCols(19), 1, deviations, mean_prediction),
+               s2kf::DimensionError);
+  EXPECT_THROW(h.evaluate_symmetric_deviations(mean, half_f, 1, deviations, mean_prediction.head(14)),
+               s2kf::DimensionError);
+  EXPECT_THROW(h.markers_at(mean.head(45)), s2kf::DimensionError);
+  // A new reference orientation is a new pose, though the state is the same.
+  h.set_reference_orientation(Eigen::Matrix3d::Identity());
+  all.set_reference_orientation(Eigen::Matrix3d::Identity());
+  all(mean, every);
+  EXPECT_EQ(h.markers_at(mean), every.col(0));
+}
+
 // At pitch = 90 deg roll and yaw turn about the same axis: their marker Jacobian columns are parallel.
 // The local rotation error keeps three independent directions there.
 TEST(MarkerMeasurementModel, LocalRotationErrorStaysFullRankAtPitchNinetyDegrees) {

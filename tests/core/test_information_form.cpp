@@ -11,6 +11,7 @@
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -429,7 +430,88 @@ struct SharedQuadraticModel {
   }
 };
 
+// A model that gives the update its samples as float deviations from the mean's predictions
+// (evaluate_symmetric_deviations, as body::MarkerMeasurementModel does): here `plain`'s predictions
+// in double minus the mean's, rounded to float, so that the update's float path and its double
+// predictions path see the same model.
+template <typename Model>
+struct FloatDeviations {
+  Model plain;
+  int calls = 0;
+  void operator()(const Eigen::MatrixXd& x, Eigen::MatrixXd& y) const { plain(x, y); }
+  bool evaluate_symmetric_deviations(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                                     const Eigen::Ref<const Eigen::MatrixXf>& half, Eigen::Index origin,
+                                     Eigen::Ref<Eigen::MatrixXf> deviations,
+                                     Eigen::Ref<Eigen::VectorXd> mean_prediction) {
+    ++calls;
+    const Eigen::MatrixXd h = half.cast<double>();
+    Eigen::MatrixXd states(mean.size(), origin + 2 * h.cols());
+    states.leftCols(origin).colwise() = mean;
+    states.middleCols(origin, h.cols()) = h.colwise() + mean;
+    states.rightCols(h.cols()) = (-h).colwise() + mean;
+    Eigen::MatrixXd y(deviations.rows(), states.cols()), at_mean(deviations.rows(), 1);
+    plain(states, y);
+    plain(Eigen::MatrixXd(mean), at_mean);
+    deviations = (y.colwise() - at_mean.col(0)).cast<float>();
+    mean_prediction = at_mean.col(0);
+    return true;
+  }
+};
+
 }  // namespace
+
+TEST(InformationForm, AModelsFloatDeviationsGiveTheUpdateOfItsPredictions) {
+  // The single-precision update of a model that hands over float deviations from its mean
+  // prediction (not centred, not weighted: the update centres the moments by the deviations'
+  // mean, which nonlinear blocks move away from zero) against the same update of its double
+  // predictions: the information form with a large group, hidden components and the block gate,
+  // its fallback to the ordinary update, the products of two states, and the square-root gain.
+  // Both round in float: within 2e-5.
+  std::mt19937_64 rng(43);
+  const int n = 8, m = 27;
+  PartlyNonlinearModel nonlinear{random_matrix(m, n, rng), {0, 1, 4, 8}};
+  const GaussianXd prior(random_matrix(n, 1, rng) * 0.3, random_spd(n, rng) * 0.3);
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(m, m) * 0.5;
+  const Eigen::VectorXd y = random_matrix(m, 1, rng);
+  std::vector<int> groups(m, 0);  // blocks 0-6 one group of 21 components, then two of 3
+  for (int i = 21; i < m; ++i) groups[static_cast<std::size_t>(i)] = i < 24 ? 1 : 2;
+  const std::vector<int> states = {0, 1};
+  ObservedMask hidden = ObservedMask::Constant(m, true);
+  hidden.segment(3, 3).setConstant(false);
+  hidden(10) = false;
+  struct Case {
+    const char* what;
+    bool information_form;
+    double limit;
+    const std::vector<int>* products;
+    ObservedMask observed;
+  };
+  const double none = std::numeric_limits<double>::infinity();
+  const ObservedMask all = ObservedMask::Constant(m, true);
+  for (const Case& c :
+       {Case{"information form", true, none, nullptr, all},
+        Case{"hidden components", true, none, nullptr, hidden}, Case{"fallback", true, 1e-6, nullptr, hidden},
+        Case{"products", true, none, &states, all}, Case{"square-root gain", false, none, nullptr, hidden}}) {
+    for (const int samples : {41, 40}) {  // with the origin and without
+      UpdateOptions options = information_form(3);
+      options.information_form = c.information_form;
+      options.information_form_max_nonlinearity = c.limit;
+      options.information_groups = &groups;
+      options.information_quadratic_states = c.products;
+      options.single_precision_moments = true;
+      options.block_gate_probability = 0.9999;
+      S2kf filter(s2kf::compute_lcd_sample_set(n, samples).set);
+      FloatDeviations<PartlyNonlinearModel> model{nonlinear};
+      GaussianXd through_float = prior, through_double = prior;
+      ASSERT_TRUE(filter.update(through_float, model, y, r, c.observed, options).ok()) << c.what;
+      ASSERT_TRUE(filter.update(through_double, nonlinear, y, r, c.observed, options).ok()) << c.what;
+      EXPECT_EQ(model.calls, 1) << c.what;
+      EXPECT_LT(relative_error(through_float.mean, through_double.mean), 2e-5) << c.what << ", " << samples;
+      EXPECT_LT(relative_error(through_float.covariance, through_double.covariance), 2e-5)
+          << c.what << ", " << samples;
+    }
+  }
+}
 
 TEST(InformationForm, ASharedQuadraticNonlinearityCarriedAsProductsGivesTheOrdinaryUpdate) {
   // The regression on the state and on the whitened products of states 0 and 1 explains these

@@ -308,6 +308,33 @@ S2KF_ALWAYS_INLINE void transpose_four(const Scalar* from, double* to, Eigen::In
   *reinterpret_cast<Unaligned4*>(to + 3 * stride) = S2KF_SHUFFLE4(t1, t3, 2, 3, 6, 7) + offset;
 }
 #undef S2KF_SHUFFLE4
+
+/// Four floats in one vector, and the mask type of their shuffles.
+typedef float Float4 __attribute__((vector_size(4 * sizeof(float))));
+typedef int Int4 __attribute__((vector_size(4 * sizeof(int))));
+#if defined(__clang__)
+#define S2KF_SHUFFLE4F(a, b, i0, i1, i2, i3) __builtin_shufflevector(a, b, i0, i1, i2, i3)
+#else
+#define S2KF_SHUFFLE4F(a, b, i0, i1, i2, i3) __builtin_shuffle(a, b, (Int4{i0, i1, i2, i3}))
+#endif
+
+/// to[k * stride + r] = from[r * S + k] for a 4 x 4 tile of floats (transpose_four without the
+/// conversion to double).
+template <Eigen::Index S>
+S2KF_ALWAYS_INLINE void transpose_four_floats(const float* from, float* to, Eigen::Index stride) {
+  typedef float Unaligned4 __attribute__((vector_size(4 * sizeof(float)), aligned(sizeof(float)), may_alias));
+  const Float4 r0 = *reinterpret_cast<const Unaligned4*>(from);
+  const Float4 r1 = *reinterpret_cast<const Unaligned4*>(from + S);
+  const Float4 r2 = *reinterpret_cast<const Unaligned4*>(from + 2 * S);
+  const Float4 r3 = *reinterpret_cast<const Unaligned4*>(from + 3 * S);
+  const Float4 t0 = S2KF_SHUFFLE4F(r0, r1, 0, 4, 1, 5), t1 = S2KF_SHUFFLE4F(r0, r1, 2, 6, 3, 7);
+  const Float4 t2 = S2KF_SHUFFLE4F(r2, r3, 0, 4, 1, 5), t3 = S2KF_SHUFFLE4F(r2, r3, 2, 6, 3, 7);
+  *reinterpret_cast<Unaligned4*>(to) = S2KF_SHUFFLE4F(t0, t2, 0, 1, 4, 5);
+  *reinterpret_cast<Unaligned4*>(to + stride) = S2KF_SHUFFLE4F(t0, t2, 2, 3, 6, 7);
+  *reinterpret_cast<Unaligned4*>(to + 2 * stride) = S2KF_SHUFFLE4F(t1, t3, 0, 1, 4, 5);
+  *reinterpret_cast<Unaligned4*>(to + 3 * stride) = S2KF_SHUFFLE4F(t1, t3, 2, 3, 6, 7);
+}
+#undef S2KF_SHUFFLE4F
 }  // namespace detail
 
 /// markers.col(i) = the i-th pose's ws.markers (rows x0, y0, z0, x1, ...), plus `offset` (one number
@@ -344,6 +371,30 @@ S2KF_ALWAYS_INLINE void copy_markers_out(const BasicForwardKinematicsWorkspace<S
     for (Eigen::Index i = n4; i < n; ++i) {
       double* to = markers + i * stride + top;
       for (Eigen::Index k = 0; k < r; ++k) to[k] = from[(top + k) * S + i] + add(top + k);
+    }
+  }
+}
+
+/// The same in float without an offset, for the deviations from a mean pose
+/// (forward_kinematics_deviation_block): markers.col(i) = the i-th pose's ws.markers.
+template <InstructionSet Set = compiled_instruction_set()>
+S2KF_ALWAYS_INLINE void copy_deviations_out(const BasicForwardKinematicsWorkspace<float>& ws, Eigen::Index n,
+                                            float* markers, Eigen::Index rows, Eigen::Index stride) {
+  constexpr Eigen::Index S = BasicForwardKinematicsWorkspace<float>::kStride, kRows = 8;
+  const float* from = ws.markers.data();
+  const Eigen::Index n4 = n - n % 4;
+  for (Eigen::Index top = 0; top < rows; top += kRows) {
+    const Eigen::Index r = std::min(kRows, rows - top), r4 = r - r % 4;
+    for (Eigen::Index i = 0; i < n4; i += 4) {
+      float* to = markers + i * stride + top;
+      for (Eigen::Index k = 0; k < r4; k += 4)
+        detail::transpose_four_floats<S>(from + (top + k) * S + i, to + k, stride);
+      for (Eigen::Index k = r4; k < r; ++k)
+        for (Eigen::Index j = 0; j < 4; ++j) to[j * stride + k] = from[(top + k) * S + i + j];
+    }
+    for (Eigen::Index i = n4; i < n; ++i) {
+      float* to = markers + i * stride + top;
+      for (Eigen::Index k = 0; k < r; ++k) to[k] = from[(top + k) * S + i];
     }
   }
 }

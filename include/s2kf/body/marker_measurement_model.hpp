@@ -111,18 +111,39 @@ class MarkerMeasurementModel {
                           const Eigen::Ref<const Eigen::VectorXd>& mean,
                           const Eigen::Ref<const Eigen::MatrixXd>& half_deviations, Eigen::Index origin_count,
                           Eigen::Ref<Eigen::MatrixXd> predictions);
+  /// The same deviations for the filter's single-precision moments, without the round trip through
+  /// double predictions: `deviations` (measurement_dimension() x (origin_count + 2 H.cols()))
+  /// receives each sample's predictions minus the mean pose's in float, `mean_prediction` the mean
+  /// pose's in double; H in float. False (nothing written) where set_single_precision_deviations is
+  /// off or set_single_precision on: then evaluate_symmetric is the way.
+  bool evaluate_symmetric_deviations(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                                     const Eigen::Ref<const Eigen::MatrixXf>& half_deviations,
+                                     Eigen::Index origin_count, Eigen::Ref<Eigen::MatrixXf> deviations,
+                                     Eigen::Ref<Eigen::VectorXd> mean_prediction);
+  /// Every model marker (3 M: x0, y0, z0, x1, ...) at one state, in double whatever
+  /// set_single_precision says. Kept with the state and the reference orientation: evaluate_symmetric
+  /// about the same mean (the next frame of a tracker) does not evaluate it again.
+  const Eigen::VectorXd& markers_at(const Eigen::Ref<const Eigen::VectorXd>& state) {
+    check_state_size(state.size(), "markers_at");
+    evaluate_mean_pose(state);
+    return mean_markers_;
+  }
+
   void set_single_precision_deviations(bool single) { single_precision_deviations_ = single; }
   bool single_precision_deviations() const { return single_precision_deviations_; }
 
  private:
   static constexpr Eigen::Index S = ForwardKinematicsWorkspace::kStride;  // spacing of the arrays
 
+  // predictions.col(i) = the selected markers (with `all_markers` every model marker) at states.col(i).
   template <typename Scalar>
   void evaluate(const Eigen::Ref<const Eigen::MatrixXd>& states, Eigen::Ref<Eigen::MatrixXd> predictions,
-                BasicForwardKinematicsWorkspace<Scalar>& ws, std::vector<Scalar>& orientation) {
+                BasicForwardKinematicsWorkspace<Scalar>& ws, std::vector<Scalar>& orientation,
+                bool all_markers = false) {
     const Eigen::Index count = states.cols();
     const int joint_count = model_.joint_count();
-    ws.prepare(model_, static_cast<Eigen::Index>(selected_.size()));
+    ws.prepare(model_, all_markers ? model_.marker_count() : static_cast<Eigen::Index>(selected_.size()));
+    const std::vector<int>& markers = all_markers ? ws.all_markers : selected_;
     if (orientation.size() != static_cast<std::size_t>(9 * S)) orientation.assign(9 * S, Scalar(0));
     const Eigen::Index B = ForwardKinematicsWorkspace::block_size(count);
     eigen_assert(states.innerStride() == 1 && predictions.innerStride() == 1);
@@ -143,7 +164,7 @@ class MarkerMeasurementModel {
         else
           stage_local_rotations(n, ws, orientation.data());
         stage_joint_angles(n, ws);
-        forward_kinematics_block(model_, selected_, ws, n);
+        forward_kinematics_block(model_, markers, ws, n);
         copy_markers_out<decltype(tag)::value>(ws, n, predictions.data() + start * predictions.outerStride(),
                                                predictions.rows(), predictions.outerStride());
       });
@@ -151,22 +172,26 @@ class MarkerMeasurementModel {
   }
 
   // evaluate_symmetric with float deviations: the mean pose in double (ws_mean_), then every block
-  // of samples as deviations from it (ws_deviation_).
-  void evaluate_deviations(const Eigen::Ref<const Eigen::VectorXd>& mean,
-                           const Eigen::Ref<const Eigen::MatrixXd>& half, Eigen::Index origin_count,
-                           Eigen::Ref<Eigen::MatrixXd> predictions) {
-    const Eigen::Index count = predictions.cols(), h = half.cols(), rows = predictions.rows();
-    const int joint_count = model_.joint_count(), frame_count = model_.frame_count();
+  // of samples as deviations from it (ws_deviation_), written to `out` (rows x count, column-major)
+  // as predictions in double (the mean's added) or as the deviations themselves in float.
+  template <typename HalfScalar, typename OutScalar>
+  void evaluate_deviations(
+      const Eigen::Ref<const Eigen::VectorXd>& mean,
+      const Eigen::Ref<const Eigen::Matrix<HalfScalar, Eigen::Dynamic, Eigen::Dynamic>>& half,
+      Eigen::Index origin_count, OutScalar* out, Eigen::Index out_stride, Eigen::Index count) {
+    const Eigen::Index h = half.cols(), rows = measurement_dimension();
+    const int joint_count = model_.joint_count();
+    evaluate_mean_pose(mean);
     mean_prediction_.resize(rows);
-    evaluate(mean, Eigen::Map<Eigen::MatrixXd>(mean_prediction_.data(), rows, 1), ws_mean_,
-             orientation_mean_);
-    prepare_mean_constants(mean, frame_count, joint_count);
+    for (std::size_t k = 0; k < selected_.size(); ++k)
+      mean_prediction_.segment<3>(3 * static_cast<Eigen::Index>(k)) =
+          mean_markers_.segment<3>(3 * selected_[k]);
     ws_deviation_.prepare_deviations(model_, static_cast<Eigen::Index>(selected_.size()));
     ws_.prepare(model_,
                 static_cast<Eigen::Index>(selected_.size()));  // the samples' root rotations in double
     if (orientation_buffer_.size() != static_cast<std::size_t>(9 * S)) orientation_buffer_.assign(9 * S, 0.0);
     const Eigen::Index B = ForwardKinematicsWorkspace::block_size(count);
-    eigen_assert(half.innerStride() == 1 && predictions.innerStride() == 1);
+    eigen_assert(half.innerStride() == 1);
     const InstructionSet set = active_instruction_set();
     for (Eigen::Index start = 0; start < count; start += B) {
       const Eigen::Index n = std::min(B, count - start);
@@ -178,9 +203,9 @@ class MarkerMeasurementModel {
           const Eigen::Index g = start + i;
           const double sign = g < origin_count ? 0.0 : (g < origin_count + h ? 1.0 : -1.0);
           const Eigen::Index k = g < origin_count ? 0 : (g - origin_count) % h;
-          const double* d = half.data() + k * half.outerStride();
+          const HalfScalar* d = half.data() + k * half.outerStride();
           for (int r = 0; r < 3; ++r) ws.root_position[r * S + i] = static_cast<float>(sign * d[r]);
-          for (int a = 0; a < 3; ++a) o[a * S + i] = mean(3 + a) + sign * d[3 + a];
+          for (int a = 0; a < 3; ++a) o[a * S + i] = mean(3 + a) + sign * static_cast<double>(d[3 + a]);
           for (int j = 0; j < joint_count; ++j)
             ws.angles[j * S + i] = static_cast<float>(0.5 * sign * d[6 + j]);
         }
@@ -199,10 +224,29 @@ class MarkerMeasurementModel {
         // One block holds every pair: the - half's sines mirror the + half's (see below).
         stage_joint_deviations(n, ws, n == count ? origin_count : -1, h);
         forward_kinematics_deviation_block(model_, selected_, ws, mean_rotation_.data(), n);
-        copy_markers_out<decltype(tag)::value>(ws, n, predictions.data() + start * predictions.outerStride(),
-                                               rows, predictions.outerStride(), mean_prediction_.data());
+        if constexpr (std::is_same_v<OutScalar, float>)
+          copy_deviations_out<decltype(tag)::value>(ws, n, out + start * out_stride, rows, out_stride);
+        else
+          copy_markers_out<decltype(tag)::value>(ws, n, out + start * out_stride, rows, out_stride,
+                                                 mean_prediction_.data());
       });
     }
+  }
+
+  // Every marker at the mean pose in double (ws_mean_, mean_markers_) and prepare_mean_constants;
+  // nothing where the last call had the same mean and reference orientation (the tracker's
+  // reported markers, then the next frame's samples about the same mean).
+  void evaluate_mean_pose(const Eigen::Ref<const Eigen::VectorXd>& mean) {
+    if (mean_evaluated_ && mean_state_.size() == mean.size() && mean_state_ == mean &&
+        mean_reference_ == reference_)
+      return;
+    mean_markers_.resize(3 * model_.marker_count());
+    evaluate(mean, Eigen::Map<Eigen::MatrixXd>(mean_markers_.data(), mean_markers_.size(), 1), ws_mean_,
+             orientation_mean_, true);
+    prepare_mean_constants(mean, model_.frame_count(), model_.joint_count());
+    mean_state_ = mean;
+    mean_reference_ = reference_;
+    mean_evaluated_ = true;
   }
 
   // From the mean pose's evaluation (ws_mean_): its frames' rotations in float and, per joint,
@@ -396,6 +440,10 @@ class MarkerMeasurementModel {
   bool single_precision_deviations_ = false;
   ForwardKinematicsWorkspace ws_mean_;
   std::vector<double> orientation_mean_;
+  // evaluate_mean_pose: every marker at the mean, and the mean and reference it was evaluated at.
+  Eigen::VectorXd mean_markers_, mean_state_;
+  Eigen::Matrix3d mean_reference_ = Eigen::Matrix3d::Identity();
+  bool mean_evaluated_ = false;
   Eigen::VectorXd mean_prediction_;
   std::vector<float> mean_rotation_, joint_constants_;
   BasicForwardKinematicsWorkspace<float> ws_deviation_;

@@ -69,7 +69,28 @@ S2KF_INLINE void MarkerMeasurementModel::evaluate_symmetric(
         "describe the " +
         std::to_string(count) + " samples");
   check_predictions_size(predictions, count);
-  evaluate_deviations(mean, half_deviations, origin_count, predictions);
+  evaluate_deviations<double, double>(mean, half_deviations, origin_count, predictions.data(),
+                                      predictions.outerStride(), count);
+}
+
+S2KF_INLINE bool MarkerMeasurementModel::evaluate_symmetric_deviations(
+    const Eigen::Ref<const Eigen::VectorXd>& mean, const Eigen::Ref<const Eigen::MatrixXf>& half_deviations,
+    Eigen::Index origin_count, Eigen::Ref<Eigen::MatrixXf> deviations,
+    Eigen::Ref<Eigen::VectorXd> mean_prediction) {
+  if (!single_precision_deviations_ || single_precision_ || half_deviations.cols() == 0) return false;
+  check_state_size(mean.size(), "evaluate_symmetric_deviations");
+  const Eigen::Index count = deviations.cols();
+  if (half_deviations.rows() != mean.size() || origin_count < 0 ||
+      origin_count + 2 * half_deviations.cols() != count || deviations.rows() != measurement_dimension() ||
+      mean_prediction.size() != measurement_dimension())
+    throw DimensionError(
+        "MarkerMeasurementModel::evaluate_symmetric_deviations: the half deviations, the deviations and "
+        "the mean prediction do not fit the mean and the model");
+  eigen_assert(deviations.innerStride() == 1);
+  evaluate_deviations<float, float>(mean, half_deviations, origin_count, deviations.data(),
+                                    deviations.outerStride(), count);
+  mean_prediction = mean_prediction_;
+  return true;
 }
 
 }  // namespace s2kf::body

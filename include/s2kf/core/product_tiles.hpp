@@ -237,11 +237,14 @@ Product<typename std::decay_t<Target>::Scalar> product_of(Target& c, const Left&
 
 }  // namespace product_tiles_detail
 
-/// c += a b^T for column-major float or double matrices (blocks included): a is c.rows() x k, b
-/// c.cols() x k.
+/// c += alpha a b^T for column-major float or double matrices (blocks included): a is c.rows() x k,
+/// b c.cols() x k.
 template <typename Target, typename Left, typename Right>
-void add_product_transposed(Target&& c, const Left& a, const Right& b) {
-  product_tiles_detail::add_products(product_tiles_detail::product_of(c, a, b));
+void add_product_transposed(Target&& c, const Left& a, const Right& b,
+                            typename std::decay_t<Target>::Scalar alpha = 1) {
+  auto product = product_tiles_detail::product_of(c, a, b);
+  product.alpha = alpha;
+  product_tiles_detail::add_products(product);
 }
 
 /// c += l b^T with l lower triangular: l's entries above its diagonal must be zero (a tile reads

@@ -220,9 +220,17 @@ class FilterCore {
   /// (group_of) instead of the whole m x m rank update. Small groups (a marker's x, y, z): a
   /// product per row and offset within the group, accumulated column by column; larger ones (a
   /// limb's markers): one rank update per group.
+  /// With `centre` (float_deviations_): d holds deviations from another point and no weights, and
+  /// the blocks receive `scale` sum d_i d_i^T - centre_weight_ centre centre^T.
   template <typename Scalar, typename Deviations>
   void add_diagonal_block_moments(Eigen::Block<Eigen::MatrixXd>& cyy, const Deviations& d,
-                                  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& products) const {
+                                  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& products,
+                                  double scale = 1, const double* centre = nullptr) const {
+    const auto moment = [&](Eigen::Index i, Eigen::Index j, Scalar product) {
+      return centre == nullptr
+                 ? static_cast<double>(product)
+                 : scale * static_cast<double>(product) - centre_weight_ * centre[i] * centre[j];
+    };
     const Eigen::Index mo = d.rows(), width = group_width_;  // `products`: reserve_moment_buffers
     if (width > kMaxBlock) {
       for (Eigen::Index k = 0; k < mo;) {
@@ -235,7 +243,7 @@ class FilterCore {
         else
           block.template selfadjointView<Eigen::Lower>().rankUpdate(d.middleRows(k, end - k));
         for (Eigen::Index j = 0; j < end - k; ++j)
-          for (Eigen::Index i = j; i < end - k; ++i) cyy(k + i, k + j) += static_cast<double>(block(i, j));
+          for (Eigen::Index i = j; i < end - k; ++i) cyy(k + i, k + j) += moment(k + i, k + j, block(i, j));
         k = end;
       }
       return;
@@ -249,17 +257,25 @@ class FilterCore {
     }
     for (Eigen::Index k = 0; k < mo; ++k)
       for (Eigen::Index s = 0; s < width && k + s < mo; ++s)
-        if (group_of(index_(k + s)) == group_of(index_(k)))
-          cyy(k + s, k) += static_cast<double>(products(k, s));
+        if (group_of(index_(k + s)) == group_of(index_(k))) cyy(k + s, k) += moment(k + s, k, products(k, s));
   }
 
   /// After the system model's evaluation (in propagated_): the predicted mean and covariance.
   FilterStatus finish_predict(Eigen::Ref<Eigen::VectorXd> mean, Eigen::Ref<Eigen::MatrixXd> covariance,
                               const Eigen::MatrixXd& q);
 
-  /// x_i = m + S z_i with S the lower Cholesky factor of C; keeps the deviations S z_i in x_dev_.
+  /// x_i = m + S z_i with S the lower Cholesky factor of C; keeps the deviations S z_i in x_dev_
+  /// (a symmetric set: S z_k of its + half in half_deviation_, or with `single_precision` in float
+  /// in drawn_deviation_f_, and x_ and half_deviation_ only from complete_drawn_samples()).
   FilterStatus draw_samples(const Eigen::Ref<const Eigen::VectorXd>& mean,
-                            const Eigen::Ref<const Eigen::MatrixXd>& covariance);
+                            const Eigen::Ref<const Eigen::MatrixXd>& covariance,
+                            bool single_precision = false);
+
+  /// x_ from the mean and half_deviation_ (a symmetric set).
+  void mirror_half_deviations(const Eigen::Ref<const Eigen::VectorXd>& mean);
+
+  /// After a draw in single precision: half_deviation_ and x_ in double, for whatever reads them.
+  void complete_drawn_samples();
 
   /// Recognises the symmetric layout of symmetric_set and ukf_sample_set: an optional origin first,
   /// then +s_1..+s_h, then -s_1..-s_h, with equal weights within each pair (exact comparisons).
@@ -296,6 +312,25 @@ class FilterCore {
   /// Sizes the buffers for m predicted components and returns the one the model writes into: with
   /// every component observed the model writes straight into y_dev_ (no gather).
   Eigen::MatrixXd& prepare_predictions(Eigen::Index m);
+
+  /// prepare_predictions for a model that writes float deviations from its mean prediction
+  /// (evaluate_symmetric_deviations): the buffer it writes them into, y_dev_f_ itself when every
+  /// component is observed, and the double buffers sized for a fallback as well.
+  Eigen::Block<Eigen::MatrixXf> prepare_float_predictions(Eigen::Index m);
+
+  /// After evaluate_symmetric_deviations: the observed rows of the deviations d_i in y_dev_f_ (not
+  /// centred, not scaled; float_deviations_), their weighted mean in deviation_centre_, the
+  /// predictions' mean (mean_prediction_ plus it) in y_mean_, each row's spread in
+  /// component_spread_ and the pairs' differences d+_k - d-_k, all in one pass over the columns.
+  FilterStatus gather_float_deviations(Eigen::Index m);
+
+  /// y_dev_ (observed rows) = y_i - y^ in double from the float deviations, for the passes that
+  /// read them in double (the ordinary update).
+  void expand_float_deviations();
+
+  /// y_dev_f_ = sqrt(w_i) (y_i - y^) from the float deviations (what the quadratic regression
+  /// reads), after expand_float_deviations.
+  void normalise_float_deviations();
 
   /// The observed rows of the model's predictions in y_dev_ and their weighted mean in y_mean_;
   /// the deviations from it are formed by centre_deviations() where they are read in double.
@@ -392,7 +427,10 @@ class FilterCore {
     if (group_regression_.rows() < group_width_ || group_regression_.cols() != regressors)
       group_regression_.resize(std::max(group_regression_.rows(), group_width_), regressors);
     if (single_precision) {
-      single_buffer(regression_f_, n, m);
+      single_buffer(regression_f_, regressors, m);
+      single_buffer(group_regression_f_, group_width_, regressors);
+      single_buffer(group_products_f_, group_width_, group_width_);
+      single_buffer(information_f_, regressors, regressors);
       if (products_f.rows() < m || products_f.cols() < group_width_) products_f.resize(m, group_width_);
     }
     state_step_.resize(n);
@@ -443,8 +481,13 @@ class FilterCore {
   // Scratch space, grown to the largest sizes seen and then reused.
   Eigen::LLT<Eigen::MatrixXd> factor_;
   Eigen::MatrixXd x_dev_, x_, propagated_, predictions_, y_dev_, cyy_, cyx_, posterior_covariance_;
-  Eigen::MatrixXd half_deviation_;   ///< S z_k of the +s half of a symmetric set (then times sqrt w)
-  Eigen::MatrixXd half_points_t_;    ///< the z_k of that half, transposed (h x n): S Z^T's operand
+  Eigen::MatrixXd half_deviation_;  ///< S z_k of the +s half of a symmetric set (then times sqrt w)
+  Eigen::MatrixXd half_points_t_;   ///< the z_k of that half, transposed (h x n): S Z^T's operand
+  // draw_samples in single precision: S and Z^T in float, S z_k of the + half, the mean drawn
+  // around, and whether x_ and half_deviation_ are still to be formed from them.
+  Eigen::MatrixXf half_points_t_f_, lower_factor_f_, drawn_deviation_f_;
+  Eigen::VectorXd drawn_mean_;
+  bool double_samples_pending_ = false;
   Eigen::MatrixXd lower_factor_;     ///< S with zeros above its diagonal
   Eigen::MatrixXd pair_difference_;  ///< sqrt(w) (y+_k - y-_k) of the observed rows
   Eigen::VectorXd y_mean_, innovation_;
@@ -456,6 +499,8 @@ class FilterCore {
   Eigen::MatrixXd scaled_points_, regression_, block_products_;
   Eigen::MatrixXd group_regression_;  ///< a large group's G_b (G^T's columns transposed): G_b G_b^T's operand
   Eigen::MatrixXf scaled_points_f_, regression_f_, block_products_f_, component_spread_f_;
+  // The information form in single precision: a large group's G_b and G_b G_b^T, and G^T G.
+  Eigen::MatrixXf group_regression_f_, group_products_f_, information_f_;
   // UpdateOptions::information_quadratic_states: sqrt(w) times the products of each + sample, the
   // pair sums sqrt(w) (y+_k + y-_k - 2 y^) and the products' cross moments with them.
   const std::vector<int>* quadratic_states_ = nullptr;
@@ -467,6 +512,12 @@ class FilterCore {
   Eigen::Index observed_count_ = 0;
   bool direct_ = false;   ///< the model writes straight into y_dev_ (see prepare_predictions)
   bool centred_ = false;  ///< y_dev_ holds deviations from y_mean_, not the predictions
+  /// y_dev_f_ holds the model's float deviations d_i from mean_prediction_ (observed rows), neither
+  /// centred nor scaled (gather_float_deviations); y_dev_ is not filled.
+  bool float_deviations_ = false;
+  Eigen::MatrixXf predictions_f_;  ///< the float deviations of every row, where some are not observed
+  Eigen::VectorXd mean_prediction_, deviation_centre_;  ///< h(mean); sum w d_i (observed rows)
+  double centre_weight_ = 1;  ///< 2 - sum w: sum w (d - c)(d - c)^T = sum w d d^T - centre_weight_ c c^T
   std::vector<Eigen::Index> rejected_blocks_;  ///< ascending
   const std::vector<int>* groups_ = nullptr;   ///< UpdateOptions::information_groups of this update
   Eigen::Index group_block_size_ = 1;          ///< the block size, when groups_ is null
@@ -481,6 +532,17 @@ class FilterCore {
   Eigen::Index unread_count_ = 0;
   Eigen::MatrixXd unread_basis_, unread_factor_, unread_whitened_, unread_coefficients_;
 };
+
+/// Whether a measurement model has `evaluate_symmetric_deviations(mean, half_deviations (float),
+/// origin_count, deviations (float), mean_prediction)` (see SmartSamplingKalmanFilter).
+template <typename Model, typename = void>
+struct EvaluatesSymmetricDeviations : std::false_type {};
+template <typename Model>
+struct EvaluatesSymmetricDeviations<
+    Model, std::void_t<decltype(std::declval<Model&>().evaluate_symmetric_deviations(
+               std::declval<const Eigen::VectorXd&>(), std::declval<const Eigen::MatrixXf&>(), Eigen::Index{},
+               std::declval<Eigen::Block<Eigen::MatrixXf>&>(), std::declval<Eigen::VectorXd&>()))>>
+    : std::true_type {};
 
 /// Whether a measurement model has `evaluate_symmetric(states, mean, half_deviations, origin_count,
 /// out)` (see SmartSamplingKalmanFilter).
@@ -560,7 +622,10 @@ class SmartSamplingKalmanFilter : public detail::FilterCore {
     UpdateResult result = begin_update(state.dimension(), y, r, observed, options);
     if (!result.ok()) return result;
     if (options.iterations > 1) return iterated_update(state, h, y, r, options, result);
-    if ((result.status = draw_samples(state.mean, state.covariance)) != FilterStatus::ok) return result;
+    if ((result.status = draw_samples(state.mean, state.covariance,
+                                      options.single_precision_moments && positive_weights_)) !=
+        FilterStatus::ok)
+      return result;
     if ((result.status = evaluate_observed(h, y.size(), state.mean)) != FilterStatus::ok) return result;
     return finish_update(state.mean, state.covariance, y, r, options, result);
   }
@@ -571,7 +636,18 @@ class SmartSamplingKalmanFilter : public detail::FilterCore {
   template <typename MeasurementModel>
   FilterStatus evaluate_observed(MeasurementModel& h, Eigen::Index m,
                                  const Eigen::Ref<const Eigen::VectorXd>& mean) {
+    if constexpr (detail::EvaluatesSymmetricDeviations<std::remove_reference_t<MeasurementModel>>::value) {
+      // Samples drawn in float (single-precision moments): the model's deviations go to the
+      // moments in float, never through double predictions.
+      if (double_samples_pending_ && equal_weights_) {
+        auto deviations = prepare_float_predictions(m);
+        if (h.evaluate_symmetric_deviations(mean, drawn_deviation_f_, origin_count_, deviations,
+                                            mean_prediction_))
+          return gather_float_deviations(m);
+      }
+    }
     Eigen::MatrixXd& predictions = prepare_predictions(m);
+    complete_drawn_samples();
     if constexpr (detail::EvaluatesSymmetricSets<std::remove_reference_t<MeasurementModel>>::value) {
       if (symmetric_ && !keep_full_deviations_) {  // half_deviation_ holds S z of the + half, unscaled
         h.evaluate_symmetric(static_cast<const Eigen::MatrixXd&>(x_), mean,

@@ -34,7 +34,10 @@ S2KF_INLINE FilterCore::FilterCore(SampleSet samples) : samples_(std::move(sampl
                          : Eigen::MatrixXd(samples_.points * sqrt_weights_.asDiagonal());
     scaled_points_f_ = scaled_points_.cast<float>();
   }
-  if (symmetric_) half_points_t_ = samples_.points.middleCols(origin_count_, half_count_).transpose();
+  if (symmetric_) {
+    half_points_t_ = samples_.points.middleCols(origin_count_, half_count_).transpose();
+    half_points_t_f_ = half_points_t_.cast<float>();
+  }
 }
 
 // Out of the class, so that a program that links the compiled library (S2KF_COMPILED) takes
@@ -137,7 +140,10 @@ S2KF_INLINE UpdateResult FilterCore::finish_update(Eigen::Ref<Eigen::VectorXd> m
     accumulate_regression(single);
     if (unread_count_ > 0) project_out_unread(regression_.block(quadratic_count_, 0, n, mo));
     if (information_form_nonlinearity(r) <= options.information_form_max_nonlinearity) {
-      if (single)
+      if (single && float_deviations_)
+        add_diagonal_block_moments(cyy, y_dev_f_.topLeftCorner(mo, samples_.count()), block_products_f_,
+                                   samples_.weights(0), deviation_centre_.data());
+      else if (single)
         add_diagonal_block_moments(cyy, y_dev_f_.topLeftCorner(mo, samples_.count()), block_products_f_);
       else
         add_diagonal_block_moments(cyy, y_dev_.topRows(mo), block_products_);
@@ -354,6 +360,7 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
                                                            UpdateResult result) {
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxBlock, kMaxBlock>;
   const Eigen::Index n = mean.size(), mo = result.observed, p = quadratic_count_, na = p + n;
+  const bool single = options.single_precision_moments;
   // In the whitened coordinates u = S^-1 (x - m) the prior is N(0, I) and the predictions regress
   // on u with G (regression_ holds G^T, one column per observed component), and on the whitened
   // products q~ (UpdateOptions::information_quadratic_states, prior N(0, I) too, uncorrelated
@@ -389,10 +396,22 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
     auto panel = bordered_.panel();
     auto d_group = panel.topRows(d);
     auto g_group = gt.middleCols(k, d);
-    d_group.template triangularView<Eigen::Lower>() = cyy_.block(k, k, d, d);
-    auto g_rows = group_regression_.topRows(d);
-    g_rows = g_group.transpose();
-    add_self_product_lower(d_group, g_rows, -1.0);  // the tiles of the processor, not the build's
+    if (single) {
+      // G_b G_b^T in float, as C_b was summed: both round relative to C_b, far below R_b.
+      auto g_rows = single_buffer(group_regression_f_, d, na);
+      g_rows = g_group.transpose().template cast<float>();
+      auto explained = single_buffer(group_products_f_, d, d);
+      explained.template triangularView<Eigen::Lower>().setZero();
+      add_self_product_lower(explained, g_rows);
+      for (Eigen::Index j = 0; j < d; ++j)
+        for (Eigen::Index i = j; i < d; ++i)
+          d_group(i, j) = cyy_(k + i, k + j) - static_cast<double>(explained(i, j));
+    } else {
+      d_group.template triangularView<Eigen::Lower>() = cyy_.block(k, k, d, d);
+      auto g_rows = group_regression_.topRows(d);
+      g_rows = g_group.transpose();
+      add_self_product_lower(d_group, g_rows, -1.0);  // the tiles of the processor, not the build's
+    }
     panel.middleRows(d, na) = g_group;
     panel.row(d + na) = innovation.segment(k, d).transpose();
     if (!bordered_.factorise()) return false;
@@ -426,7 +445,17 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
   auto panel = bordered_.panel();
   auto information = panel.topRows(na);
   information.setIdentity();
-  rank_update_lower(information, gt);
+  if (single) {
+    // G^T G in float, as G itself was summed: the same relative rounding of W = D^-1/2 G.
+    auto gt_f = single_buffer(regression_f_, na, mo);
+    gt_f = gt.template cast<float>();
+    auto products = single_buffer(information_f_, na, na);
+    products.template triangularView<Eigen::Lower>().setZero();
+    add_self_product_lower(products, gt_f);
+    information.template triangularView<Eigen::Lower>() += products.template cast<double>();
+  } else {
+    rank_update_lower(information, gt);
+  }
   auto prior_factor = panel.middleRows(na, n);
   prior_factor.leftCols(p).setZero();
   prior_factor.rightCols(n).template triangularView<Eigen::Lower>() = factor_.matrixL();
@@ -457,29 +486,61 @@ S2KF_INLINE UpdateResult FilterCore::information_form_gain(Eigen::Ref<Eigen::Vec
 }
 
 S2KF_INLINE FilterStatus FilterCore::draw_samples(const Eigen::Ref<const Eigen::VectorXd>& mean,
-                                                  const Eigen::Ref<const Eigen::MatrixXd>& covariance) {
+                                                  const Eigen::Ref<const Eigen::MatrixXd>& covariance,
+                                                  bool single_precision) {
   if (samples_.dimension() != mean.size())
     throw DimensionError("the state has dimension " + std::to_string(mean.size()) + " but the samples " +
                          std::to_string(samples_.dimension()));
+  double_samples_pending_ = false;
   factor_.compute(covariance);
   if (factor_.info() != Eigen::Success || !mean.allFinite()) return FilterStatus::prior_not_positive_definite;
   if (symmetric_ && !keep_full_deviations_) {
     // S (-z) = -(S z) exactly: map the half set only, then mirror it.
-    const Eigen::Index h = half_count_, o = origin_count_;
+    const Eigen::Index h = half_count_;
+    if (single_precision) {
+      // S Z in float: each deviation rounded relative to its own size, as the model's float
+      // deviations are; the samples in double only where something reads them
+      // (complete_drawn_samples).
+      const Eigen::Index n = mean.size();
+      const Eigen::MatrixXd& l = factor_.matrixLLT();
+      lower_factor_f_.resize(n, n);
+      for (Eigen::Index j = 0; j < n; ++j)
+        for (Eigen::Index i = 0; i < n; ++i)
+          lower_factor_f_(i, j) = i < j ? 0.0f : static_cast<float>(l(i, j));
+      drawn_deviation_f_.setZero(mean.size(), h);
+      half_deviation_.resize(mean.size(), h);  // sized now, so that a later fallback allocates nothing
+      x_.resize(mean.size(), samples_.count());
+      add_triangular_product_transposed(drawn_deviation_f_, lower_factor_f_, half_points_t_f_);
+      drawn_mean_ = mean;
+      double_samples_pending_ = true;
+      return FilterStatus::ok;
+    }
     // S Z in the register tiles of the processor's instruction set (core/product_tiles.hpp).
     lower_factor_ = factor_.matrixL();
     half_deviation_.setZero(mean.size(), h);
     add_triangular_product_transposed(half_deviation_, lower_factor_, half_points_t_);
-    x_.resize(mean.size(), samples_.count());
-    if (o == 1) x_.col(0) = mean;
-    x_.middleCols(o, h) = half_deviation_.colwise() + mean;
-    x_.rightCols(h) = (-half_deviation_).colwise() + mean;
+    mirror_half_deviations(mean);
     return FilterStatus::ok;
   }
   x_dev_.noalias() = factor_.matrixL() * samples_.points;
   x_ = x_dev_;
   x_.colwise() += mean;
   return FilterStatus::ok;
+}
+
+S2KF_INLINE void FilterCore::mirror_half_deviations(const Eigen::Ref<const Eigen::VectorXd>& mean) {
+  const Eigen::Index h = half_count_, o = origin_count_;
+  x_.resize(mean.size(), samples_.count());
+  if (o == 1) x_.col(0) = mean;
+  x_.middleCols(o, h) = half_deviation_.colwise() + mean;
+  x_.rightCols(h) = (-half_deviation_).colwise() + mean;
+}
+
+S2KF_INLINE void FilterCore::complete_drawn_samples() {
+  if (!double_samples_pending_) return;
+  half_deviation_ = drawn_deviation_f_.cast<double>();
+  mirror_half_deviations(drawn_mean_);
+  double_samples_pending_ = false;
 }
 
 S2KF_INLINE void FilterCore::detect_symmetry() {
@@ -503,6 +564,86 @@ S2KF_INLINE Eigen::MatrixXd& FilterCore::prepare_predictions(Eigen::Index m) {
   // Sized even when unused now, so that a later frame with hidden rows does not allocate.
   predictions_.resize(m, count);
   return direct_ ? y_dev_ : predictions_;
+}
+
+S2KF_INLINE Eigen::Block<Eigen::MatrixXf> FilterCore::prepare_float_predictions(Eigen::Index m) {
+  const Eigen::Index count = samples_.count();
+  prepare_predictions(m);  // the double buffers, for a fallback that reads y_dev_
+  // Every buffer gather_float_deviations fills, for all m rows at once: reserve_moment_buffers,
+  // which runs after it, must not grow (and so clear) one of them.
+  single_buffer(predictions_f_, m, count);
+  single_buffer(pair_difference_f_, m, half_count_);
+  single_buffer(component_spread_f_, m, 1);
+  mean_prediction_.resize(m);
+  auto y_dev_f = single_buffer(y_dev_f_, m, count);
+  return observed_count_ == m ? y_dev_f : predictions_f_.topLeftCorner(m, count);
+}
+
+S2KF_INLINE FilterStatus FilterCore::gather_float_deviations(Eigen::Index m) {
+  const Eigen::Index mo = observed_count_, count = samples_.count(), h = half_count_, o = origin_count_;
+  auto y_dev_f = single_buffer(y_dev_f_, mo, count);
+  auto spread_f = single_buffer(component_spread_f_, mo, 1).col(0);
+  auto pair_difference_f = single_buffer(pair_difference_f_, mo, h);
+  if (deviation_centre_.size() < m) deviation_centre_.resize(m);
+  if (component_spread_.size() < m) component_spread_.resize(m);
+  y_mean_.resize(std::max<Eigen::Index>(y_mean_.size(), m));
+  auto sum = deviation_centre_.head(mo);
+  sum.setZero();
+  spread_f.setZero();
+  // One pass over the columns, compiled for the processor's instruction set as in gather_observed:
+  // the observed rows (a gather where some are hidden), their sums and sums of squares, and each
+  // pair's difference.
+  const Eigen::Index* index = index_.data();
+  double* sums = sum.data();
+  float* spread = spread_f.data();
+  const bool gather = mo < m;
+  run_with_instruction_set(active_instruction_set(), [&](auto) S2KF_ALWAYS_INLINE_LAMBDA {
+    for (Eigen::Index i = 0; i < count; ++i) {
+      float* to = y_dev_f.data() + i * y_dev_f.outerStride();
+      if (gather) {
+        const float* from = predictions_f_.data() + i * predictions_f_.outerStride();
+        for (Eigen::Index k = 0; k < mo; ++k) to[k] = from[index[k]];
+      }
+      for (Eigen::Index k = 0; k < mo; ++k) {
+        sums[k] += static_cast<double>(to[k]);
+        spread[k] += to[k] * to[k];
+      }
+      if (i >= o + h) {
+        const float* plus = y_dev_f.data() + (i - h) * y_dev_f.outerStride();
+        float* difference = pair_difference_f.data() + (i - o - h) * pair_difference_f.outerStride();
+        for (Eigen::Index k = 0; k < mo; ++k) difference[k] = plus[k] - to[k];
+      }
+    }
+  });
+  // Equal weights w: the centre c = w sum d_i, and sum w (d_i - c)^2 = w sum d_i^2 - (2 - L w) c^2.
+  const double w = samples_.weights(0);
+  centre_weight_ = 2.0 - w * static_cast<double>(count);
+  sum *= w;
+  for (Eigen::Index k = 0; k < mo; ++k) {
+    y_mean_(k) = mean_prediction_(index_(k)) + sum(k);
+    component_spread_(k) = w * static_cast<double>(spread_f(k)) - centre_weight_ * sum(k) * sum(k);
+  }
+  if (!y_mean_.head(mo).allFinite()) return FilterStatus::non_finite_model_output;
+  float_deviations_ = true;
+  centred_ = false;
+  return FilterStatus::ok;
+}
+
+S2KF_INLINE void FilterCore::expand_float_deviations() {
+  if (!float_deviations_) return;
+  const Eigen::Index mo = observed_count_;
+  y_dev_.topRows(mo) = y_dev_f_.topLeftCorner(mo, samples_.count()).template cast<double>();
+  y_dev_.topRows(mo).colwise() -= deviation_centre_.head(mo);
+  centred_ = true;
+  float_deviations_ = false;
+}
+
+S2KF_INLINE void FilterCore::normalise_float_deviations() {
+  if (!float_deviations_) return;
+  expand_float_deviations();  // y_dev_ too, for a fallback to the ordinary update
+  const Eigen::Index mo = observed_count_;
+  y_dev_f_.topLeftCorner(mo, samples_.count()) =
+      (sqrt_weights_(0) * y_dev_.topRows(mo)).template cast<float>();
 }
 
 S2KF_INLINE FilterStatus FilterCore::gather_observed(Eigen::Index m) {
@@ -539,6 +680,7 @@ S2KF_INLINE FilterStatus FilterCore::gather_observed(Eigen::Index m) {
   // weight (0 * inf is NaN), so checking the mean checks every prediction.
   if (!y_mean.allFinite()) return FilterStatus::non_finite_model_output;
   centred_ = false;
+  float_deviations_ = false;
   return FilterStatus::ok;
 }
 
@@ -546,12 +688,14 @@ S2KF_INLINE void FilterCore::accumulate_moments(Eigen::Block<Eigen::MatrixXd>& c
                                                 Eigen::Block<Eigen::MatrixXd>& cyx, bool single_precision,
                                                 bool deviations_scaled) {
   const Eigen::Index mo = observed_count_;
+  expand_float_deviations();
   centre_deviations();
   auto y_dev = y_dev_.topRows(mo);
   if (symmetric_) {
     // Pairs +s_k, -s_k with equal weights: sum over a pair of w (y_i - y^)(x_i - m)^T is
     // w (y+_k - y-_k) s_k^T (y^ cancels), so Cyx costs half the product over all samples.
     const Eigen::Index h = half_count_, o = origin_count_;
+    complete_drawn_samples();
     half_deviation_ = half_deviation_ * sqrt_weights_.segment(o, h).asDiagonal();
     if (single_precision) {
       // sqrt(w_i) (y_i - y^), scaled in double and rounded once.
@@ -614,6 +758,21 @@ S2KF_INLINE void FilterCore::accumulate_regression(bool single_precision) {
       target.noalias() += points.middleCols(k, c) * deviations.middleCols(k, c).transpose();
     }
   };
+  if (single_precision && float_deviations_) {
+    // The model's float deviations, summed and paired by gather_float_deviations: the pairs'
+    // differences need no centring, and sqrt(w) is the product's factor.
+    auto regression_f = single_buffer(regression_f_, n, mo);
+    regression_f.setZero();
+    add_product_transposed(regression_f, scaled_points_f_, single_buffer(pair_difference_f_, mo, h),
+                           static_cast<float>(sqrt_weights_(0)));
+    regression = regression_f.template cast<double>();
+    if (quadratic_count_ > 0) {
+      normalise_float_deviations();
+      accumulate_quadratic_regression(true);
+    }
+    return;
+  }
+  expand_float_deviations();
   if (single_precision) {
     // sqrt(w_i) (y_i - y^), scaled in double and rounded once; in the same pass over the columns,
     // while each is in cache, the rows' sums of squares and each pair's difference y+_k - y-_k.
@@ -676,6 +835,7 @@ S2KF_INLINE void FilterCore::accumulate_quadratic_regression(bool single_precisi
   const auto d = static_cast<Eigen::Index>(states.size());
   // f_k = sqrt(w_k) q_k, q_k the products delta_a delta_b (a <= b) of the + sample's deviations
   // S z_k (half_deviation_, not yet scaled); the - sample has the same products.
+  complete_drawn_samples();
   auto features = quadratic_features_.leftCols(h);
   for (Eigen::Index k = 0; k < h; ++k) {
     const double scale = sqrt_weights_(o + k);

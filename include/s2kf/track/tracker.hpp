@@ -182,7 +182,6 @@ class Tracker {
   double rate_hz_;
   SmartSamplingKalmanFilter<Eigen::Dynamic> filter_;
   body::MarkerMeasurementModel measurement_model_;
-  body::MarkerMeasurementModel mean_markers_model_;  ///< every model marker, for the reported pose
   std::vector<int> used_markers_;        ///< model markers in the measurement, body part by body part
   std::vector<int> information_groups_;  ///< per measurement component: its marker's body part
   std::vector<std::vector<int>> marker_dependencies_;  ///< per used marker: the states it reads

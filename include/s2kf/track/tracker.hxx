@@ -13,8 +13,7 @@ S2KF_INLINE Tracker::Tracker(body::BodyModel model, body::MarkerMapping mapping,
       options_(validated(std::move(options), rate_hz)),
       rate_hz_(rate_hz),
       filter_(checked(samples, kRootDofs + model_.joint_count())),
-      measurement_model_(model_, body::OrientationParameterization::local_rotation_error),
-      mean_markers_model_(model_, body::OrientationParameterization::local_rotation_error) {
+      measurement_model_(model_, body::OrientationParameterization::local_rotation_error) {
   if (mapping_.point_of_marker.size() != static_cast<std::size_t>(model_.marker_count()))
     throw std::invalid_argument("the marker mapping does not fit the body model");
   for (int m = 0; m < model_.marker_count(); ++m)
@@ -322,14 +321,12 @@ S2KF_INLINE void Tracker::finish(const Eigen::Matrix3Xd& points,
     measurement_model_.set_reference_orientation(reference_rotation_);
     write_pose(estimate_.pose);
     estimate_.covariance = state_.covariance;  // same size every frame: no allocation
-    // Every model marker at the mean, through the batched model
-    // (allocation-free after its first call); it equals
+    // Every model marker at the mean, through the batched model (allocation-free after its first
+    // call; the next frame's samples are drawn about the same mean and reuse it); it equals
     // marker_positions(model_, pose) to rounding.
     const Eigen::Index markers = model_.marker_count();
     if (estimate_.predicted_markers.cols() != markers) estimate_.predicted_markers.resize(3, markers);
-    mean_markers_model_.set_reference_orientation(reference_rotation_);
-    mean_markers_model_(state_.mean,
-                        Eigen::Map<Eigen::MatrixXd>(estimate_.predicted_markers.data(), 3 * markers, 1));
+    estimate_.predicted_markers.reshaped() = measurement_model_.markers_at(state_.mean);
     double sum = 0;
     int count = 0;
     for (int m = 0; m < model_.marker_count(); ++m) {
