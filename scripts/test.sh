@@ -19,6 +19,10 @@ launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 # built in a folder beside build/, then finds the module's and the application layer's unity
 # batches too (their files are the build folder's own, so their absolute paths differ).
 export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
+# Depend mode: on a miss ccache hashes the compiler's own dependency file (-MD) instead of running
+# the preprocessor once more (0.6 s of a 7-s test batch; a fresh clone's build 25 s of CPU); a
+# hit is found the same way (direct mode), the wheel's objects too.
+export CCACHE_DEPEND=${CCACHE_DEPEND:-1}
 skip=()
 # The C3D mutation test (C3dFuzz) runs for a bounded time: 5 s here, 10 s under the sanitizers,
 # where a mutation that reads out of bounds is caught (CI then runs libFuzzer on the reader for
