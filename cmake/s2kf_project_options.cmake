@@ -49,6 +49,14 @@ function(s2kf_front_end_optimisation target)
   endif()
 endfunction()
 
+# s2kf_cold_unit_optimisation(SOURCE...): the compiled library's units no hot loop runs in at -Og
+# in a release build, as the front ends' code.
+function(s2kf_cold_unit_optimisation)
+  if(CMAKE_BUILD_TYPE STREQUAL "Release" AND CMAKE_CXX_FLAGS_RELEASE MATCHES "-O3")
+    set_source_files_properties(${ARGN} DIRECTORY ${PROJECT_SOURCE_DIR} PROPERTIES COMPILE_OPTIONS -Og)
+  endif()
+endfunction()
+
 # s2kf_link_libraries_first(TARGET LIBRARY...): the linker keeps the first copy of an inline function
 # it meets, and a target's own objects come before its libraries: the LIBRARY archives are linked
 # whole ahead of them instead.
