@@ -353,7 +353,7 @@ TEST(PacketChannel, AddressesResolveForEverySocketKind) {
   UdpSender sender("localhost", ntohs(address.sin_port));
   ASSERT_TRUE(sender.send(std::string("pose")));
   char got[16] = {};
-  ASSERT_TRUE(detail::wait_readable(receiver.fd(), 2000));
+  ASSERT_TRUE(live::detail::wait_readable(receiver.fd(), 2000));
   EXPECT_EQ(::recv(receiver.fd(), got, sizeof got, 0), 4);
   EXPECT_EQ(std::string(got), "pose");
 }
