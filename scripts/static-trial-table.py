@@ -74,6 +74,12 @@ def run(*command):
         sys.exit(" ".join([args.s2kf, *command]) + " failed: " + (result.stderr or result.stdout).strip())
 
 
+def reference_angle_deg(name):
+    """The reference pose's (--stance) angle of joint `name` in degrees: the upper arms' LSy, RSy."""
+    reference = {"t-pose": 90, "a-pose": 45}.get(args.stance, 0)
+    return float({"LSy": reference, "RSy": -reference}.get(name, 0))
+
+
 def write_stance(seed, path):
     """The bundled static motion with every joint held off the reference pose by its own draw."""
     table = subprocess.run([args.s2kf, "model", "--joints"], capture_output=True, text=True, check=True).stdout
@@ -81,9 +87,7 @@ def write_stance(seed, path):
     for line in table.splitlines()[1:]:
         name, _parent, _axis, lower, upper = line.split(",")[:5]
         limits[name] = (math.degrees(float(lower)), math.degrees(float(upper)))
-    reference = {"t-pose": 90, "a-pose": 45}.get(args.stance, 0)
-    base = {name: 0.0 for name in limits}
-    base["LSy"], base["RSy"] = reference, -reference
+    base = {name: reference_angle_deg(name) for name in limits}
     draw = random.Random(1000 + seed)
     held = {}
     for name, (lower, upper) in limits.items():
@@ -119,12 +123,6 @@ def write_lead_in(static_motion, motion, path):
         json.dump(still, f, indent=1)
 
 
-def reference_angle(name):
-    """The reference pose's angle of joint `name` in radians (write_stance's base)."""
-    reference = {"t-pose": 90, "a-pose": 45}.get(args.stance, 0)
-    return math.radians({"LSy": reference, "RSy": -reference}.get(name, 0))
-
-
 def known_stance(seed):
     """The static trial's true posture as a pose CSV, --unknown-joints put back at the reference pose."""
     truth = os.path.join(args.out, f"static_{seed}_truth.csv")
@@ -141,7 +139,7 @@ def known_stance(seed):
     for line in lines[1:]:
         cells = line.split(",")
         for name in unknown:
-            cells[header.index(name)] = repr(reference_angle(name))
+            cells[header.index(name)] = repr(math.radians(reference_angle_deg(name)))
         rows.append(",".join(cells))
     path = os.path.join(args.out, f"static_{seed}_known.csv")
     with open(path, "w") as f:
