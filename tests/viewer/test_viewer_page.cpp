@@ -33,8 +33,10 @@ namespace {
 namespace fs = std::filesystem;
 using s2kf::test_support::run_command;
 
-// ctest runs every test in its own process, in parallel: each process works in its own directory.
+// ctest runs every test in its own process, in parallel: each process works in its own directory,
+// and reads the recording and its tracked pages from a shared one (ViewerPage::SetUpTestSuite).
 const fs::path kWork = fs::path(s2kf::test_support::tmp_dir()) / ("viewer_" + std::to_string(::getpid()));
+const fs::path kShared = fs::path(s2kf::test_support::tmp_dir()) / "viewer_shared";
 constexpr double kHeightMm = 1750;
 constexpr int kFrames = 150;
 
@@ -67,6 +69,9 @@ nlohmann::json scene_state(const std::string& dom) {
 /// Shared by all tests: one simulated recording tracked twice, once with the subject as given
 /// (so the test can rebuild the model: the kit set is the body model's own markers) and once with
 /// the default calibration (for `s2kf view`, which must rebuild the calibrated subject itself).
+/// They are written once per ctest run, by the test viewer_page_files (a fixture every test of the
+/// page requires; S2KF_VIEWER_WRITE_FILES set), and read by each test's process; a process that
+/// finds none, or finds files of another build of the program, writes them itself.
 class ViewerPage : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -75,22 +80,37 @@ class ViewerPage : public ::testing::Test {
 #endif
     fs::remove_all(kWork);
     fs::create_directories(kWork);
-    recording_ = (kWork / "handstand.c3d").string();
+    recording_ = (kShared / "handstand.c3d").string();
+    truth_ = (kShared / "handstand_truth.csv").string();
+    plain_ = (kShared / "plain").string();
+    calibrated_ = (kShared / "calibrated").string();
+    // The program's modification time names the build that wrote the files.
+    const std::string build = std::to_string(fs::last_write_time(S2KF_CLI).time_since_epoch().count());
+    const fs::path complete = kShared / "complete", unavailable = kShared / "chromium_unavailable.txt";
+    if (std::getenv("S2KF_VIEWER_WRITE_FILES") != nullptr || !fs::exists(complete) ||
+        s2kf::test_support::slurp(complete) != build) {
+      write_shared_files();
+      if (HasFatalFailure()) return;
+      std::ofstream(unavailable) << s2kf::test_support::chromium_unavailable_reason(kWork);
+      std::ofstream(complete) << build;
+    }
+    unavailable_ = s2kf::test_support::slurp(unavailable);
+  }
+
+  static void write_shared_files() {
+    fs::remove_all(kShared);
+    fs::create_directories(kShared);
     const auto simulate = run_command("simulate --motion handstand --frames " + std::to_string(kFrames) +
                                       " --height " + std::to_string(kHeightMm) + " --out " + recording_);
     ASSERT_EQ(simulate.status, 0) << simulate.output;
-    truth_ = (kWork / "handstand_truth.csv").string();
-    plain_ = (kWork / "plain").string();
     const auto plain =
         run_command("track " + recording_ + " --out " + plain_ + " --markerset kit --no-calibrate" +
                     " --height " + std::to_string(kHeightMm) + " --truth " + truth_ + " --html --quiet");
     ASSERT_EQ(plain.status, 0) << plain.output;
-    calibrated_ = (kWork / "calibrated").string();
     // A calibration pass with a sample count of its own, which `s2kf view` must read back.
     const auto calibrated = run_command("track " + recording_ + " --out " + calibrated_ +
                                         " --calibration-samples 93 --html --quiet");
     ASSERT_EQ(calibrated.status, 0) << calibrated.output;
-    unavailable_ = s2kf::test_support::chromium_unavailable_reason(kWork);
   }
 
   static void TearDownTestSuite() { fs::remove_all(kWork); }
@@ -144,6 +164,16 @@ std::string ViewerPage::recording_, ViewerPage::truth_, ViewerPage::plain_, View
 
 #define SKIP_WITHOUT_CHROMIUM() \
   if (!unavailable_.empty()) GTEST_SKIP() << "chromium cannot run: " << unavailable_
+
+// The files every other test reads (the test viewer_page_files writes them for a ctest run).
+TEST_F(ViewerPage, TheRecordingIsTrackedIntoTwoPages) {
+  for (const std::string& prefix : {plain_, calibrated_})
+    for (const char* suffix : {".csv", ".json", ".html"})
+      EXPECT_TRUE(fs::exists(prefix + suffix)) << prefix + suffix;
+  EXPECT_EQ(s2kf::io::load_motion_csv(plain_ + ".csv").frame.size(), static_cast<std::size_t>(kFrames));
+  EXPECT_NE(page_text(calibrated_ + ".json").find("\"calibration\": {"), std::string::npos)
+      << "the second run was meant to be calibrated";
+}
 
 TEST_F(ViewerPage, SkeletonIsDrawnWhereForwardKinematicsPutsIt) {
   SKIP_WITHOUT_CHROMIUM();
@@ -240,10 +270,13 @@ TEST_F(ViewerPage, ViewRebuildsTheTrackedModelOfACalibratedRun) {
   // `s2kf view` rebuilds the calibrated subject from the summary and the recording; its page must
   // hold exactly the data of the page `track --html` wrote with the model in memory.
   const std::string tracked = page_text(calibrated_ + ".html");
-  fs::rename(calibrated_ + ".html", calibrated_ + "_track.html");
-  const auto view = run_command("view " + calibrated_);
+  // In this test's own folder: the shared page stays as track wrote it for the other tests.
+  const std::string prefix = (kWork / "calibrated").string();
+  for (const char* suffix : {".csv", ".json"})
+    fs::copy_file(calibrated_ + suffix, prefix + suffix, fs::copy_options::overwrite_existing);
+  const auto view = run_command("view " + prefix);
   ASSERT_EQ(view.status, 0) << view.output;
-  const std::string viewed = page_text(calibrated_ + ".html");
+  const std::string viewed = page_text(prefix + ".html");
   const auto data = [](const std::string& page) {
     const std::size_t begin = page.find("id=\"s2kf-data\">");
     return page.substr(begin, page.find("</script>", begin) - begin);
