@@ -6,9 +6,9 @@ from it), on the .trc s2kf wrote. Per recording and method: time per frame, mark
 markers seen each frame, averaged over frames) and, on simulated recordings, the joint-angle RMS (deg)
 against the truth over the 40 joints.
 
-  scripts/python-env.sh     # the test environment with opensim and biorbd; prints its python
-  build-venv/bin/python scripts/peer-benchmark.py [--out DIR] [--frames N] [--repeat R] [REC.c3d ...]
+  $(scripts/python-env.sh) scripts/peer-benchmark.py [--out DIR] [--frames N] [--repeat R] [REC.c3d ...]
       [--simulate MOTION:SEED ...]
+  (scripts/python-env.sh prints the test environment's python, which has opensim and biorbd)
 
 Without recordings: data/handstand.c3d, data/walk.c3d, tests/data/c3d/85_02.c3d (CMU),
 tests/data/c3d/PiG_Motion-FlatFoot-One.c3d (Plug-in Gait), and squats and jumping_jacks simulated
