@@ -30,6 +30,12 @@ def same_as_program(cli, tmp_path, result, program_arguments, known_differences=
     return set_aside
 
 
+@pytest.fixture(scope="module")
+def handstand_300(data_dir):
+    """The handstand with the defaults but a 300-frame calibration: what three tests compare with."""
+    return s2kf.track(str(data_dir / "handstand.c3d"), calibration_frames=300)
+
+
 def test_handstand_as_the_program_tracks_it(cli, tmp_path, data_dir):
     path = str(data_dir / "handstand.c3d")
     result = s2kf.track(path)
@@ -48,22 +54,22 @@ def test_handstand_as_the_program_tracks_it(cli, tmp_path, data_dir):
     np.testing.assert_allclose(result.marker_distance, distance, rtol=1e-9)
 
 
-def test_calibration_shrink_as_the_program_takes_it(cli, tmp_path, data_dir):
+def test_calibration_shrink_as_the_program_takes_it(cli, tmp_path, data_dir, handstand_300):
     path = str(data_dir / "handstand.c3d")
     result = s2kf.track(path, calibration_shrink=0.0, calibration_frames=300)
     same_as_program(cli, tmp_path, result, [path, "--calibration-shrink", "0", "--calibration-frames", "300"])
     assert result.summary["calibration"]["weak_direction_shrink"] == 0.0
-    shrunk = s2kf.track(path, calibration_frames=300)
+    shrunk = handstand_300
     assert shrunk.summary["calibration"]["segment_scale"] != result.summary["calibration"]["segment_scale"]
 
 
-def test_uniform_noise_as_the_program_takes_it(cli, tmp_path, data_dir):
+def test_uniform_noise_as_the_program_takes_it(cli, tmp_path, data_dir, handstand_300):
     """Each marker's noise follows its calibration residual unless uniform_noise is set."""
     path = str(data_dir / "handstand.c3d")
     uniform = s2kf.track(path, calibration_frames=300, uniform_noise=True)
     same_as_program(cli, tmp_path, uniform, [path, "--calibration-frames", "300", "--uniform-noise"])
     assert uniform.summary["calibration"]["marker_noise_mm"] == {}
-    default = s2kf.track(path, calibration_frames=300)
+    default = handstand_300
     noise = default.summary["calibration"]["marker_noise_mm"]
     assert len(noise) >= 30 and all(5.0 <= sd <= 20.0 for sd in noise.values())
     assert not np.array_equal(default.poses, uniform.poses)
@@ -98,14 +104,14 @@ def test_plug_in_gait_with_model_outputs_as_the_program(cli, tmp_path, c3d_dir):
     assert again.summary["labels_ignored"] == result.summary["labels_ignored"]
 
 
-def test_the_gain_as_the_program_takes_it(cli, tmp_path, data_dir):
+def test_the_gain_as_the_program_takes_it(cli, tmp_path, data_dir, handstand_300):
     """gain='square-root' is the exact update (`s2kf track --gain square-root`): other poses than the
     default information form, recorded in the summary; the streaming Tracker takes it too."""
     path = str(data_dir / "handstand.c3d")
     exact = s2kf.track(path, calibration_frames=300, gain="square-root")
     same_as_program(cli, tmp_path, exact, [path, "--calibration-frames", "300", "--gain", "square-root"])
     assert exact.summary["gain"] == "square-root"
-    default = s2kf.track(path, calibration_frames=300)
+    default = handstand_300
     assert default.summary["gain"] == "information-form"
     assert not np.array_equal(default.poses, exact.poses)
     rec = s2kf.read_c3d(path)
