@@ -23,7 +23,6 @@
 #include <fstream>
 #include <string>
 #include <vector>
-#include "address_sanitizer.hpp"
 #include "test_files.hpp"
 
 #ifdef S2KF_CLI
@@ -75,9 +74,6 @@ nlohmann::json scene_state(const std::string& dom) {
 class ViewerPage : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-#ifdef S2KF_TEST_UNDER_ASAN
-    return;  // every test of the page skips itself there (SetUp): no need to track the recording
-#endif
     fs::remove_all(kWork);
     fs::create_directories(kWork);
     recording_ = (kShared / "handstand.c3d").string();
@@ -115,10 +111,7 @@ class ViewerPage : public ::testing::Test {
 
   static void TearDownTestSuite() { fs::remove_all(kWork); }
 
-  void SetUp() override {
-    S2KF_SKIP_UNDER_SANITIZERS();
-    ASSERT_TRUE(fs::exists(plain_ + ".html")) << "the fixture's track --html failed";
-  }
+  void SetUp() override { ASSERT_TRUE(fs::exists(plain_ + ".html")) << "the fixture's track --html failed"; }
 
   /// The page's scene state after opening `page` with `fragment`; fails the test on console errors.
   static nlohmann::json open_page(const std::string& page, const std::string& fragment) {
